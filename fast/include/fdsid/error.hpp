@@ -1,0 +1,41 @@
+#pragma once
+/// Typed errors of the fdsid library.
+///
+/// Purpose: every failure of fast/ says which step failed, on which input, and
+/// with which number, so that a program embedding the library can react and the
+/// command-line tool can print one clear line and exit with status 2.
+#include <stdexcept>
+#include <string>
+
+namespace fdsid {
+
+/// What kind of failure an Error reports.
+enum class ErrorKind {
+  Input,       ///< a file or field is missing, malformed, NaN/Inf or of the wrong shape
+  Grid,        ///< the frequency grid is not one the method can use
+  Dimension,   ///< p, r, n, M violate the method's inequalities
+  Order,       ///< the model order cannot be determined or is not supported
+  Split,       ///< Akçay (2011) step 6: no clean stable/antistable split
+  Positivity,  ///< spectrum data or estimate not positive, or E - C P C^T not positive definite
+  Riccati,     ///< step 9: the Riccati equation has no stabilising solution
+  Numerical    ///< any other numerical breakdown
+};
+
+/// Short lower-case name of an ErrorKind ("split", "positivity", ...).
+const char* to_string(ErrorKind kind);
+
+/// The one exception type thrown by fast/. what() is a single line:
+/// "<where>: <message>", where <where> names the step or the input.
+class Error : public std::runtime_error {
+ public:
+  Error(ErrorKind kind, std::string where, const std::string& message);
+  ErrorKind kind() const noexcept { return kind_; }
+  /// The step ("step 6") or the input ("spectrum.csv line 12") that failed.
+  const std::string& where() const noexcept { return where_; }
+
+ private:
+  ErrorKind kind_;
+  std::string where_;
+};
+
+}  // namespace fdsid

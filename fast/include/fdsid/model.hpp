@@ -1,0 +1,65 @@
+#pragma once
+/// State-space models, their transfer functions, power spectra and spectral
+/// summands (Akçay 2011, Section 2 and the opening of Section 3).
+#include <complex>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace fdsid {
+
+using cplx = std::complex<double>;
+
+enum class Domain { Discrete, Continuous };
+
+const char* to_string(Domain d);
+
+/// x[t+1] = A x[t] + B u[t], y[t] = C x[t] + D u[t] (discrete), or
+/// dx/dt = A x + B u, y = C x + D u (continuous). Akçay (2011) Eq. (1).
+struct StateSpace {
+  Domain domain = Domain::Discrete;
+  double sample_time = 1.0;
+  Eigen::MatrixXd A, B, C, D;
+
+  int order() const { return static_cast<int>(A.rows()); }
+  int inputs() const { return static_cast<int>(B.cols()); }
+  int outputs() const { return static_cast<int>(C.rows()); }
+};
+
+/// Checks the shapes of A, B, C, D and that every entry is finite; throws
+/// Error(Input) naming the matrix otherwise.
+void validate(const StateSpace& model, const std::string& where = "model");
+
+/// G(z) = D + C (zI - A)^{-1} B, Akçay (2011) Eq. (2). Solved by LU of zI - A.
+Eigen::MatrixXcd transfer(const StateSpace& model, cplx z);
+
+/// S(z) = G(z) G^T(1/z), Akçay (2011) Eq. (3). On |z| = 1 this is G(z) G(z)^H.
+Eigen::MatrixXcd power_spectrum(const StateSpace& model, cplx z);
+
+/// Eigenvalues of A (the poles), sorted by modulus then argument.
+Eigen::VectorXcd poles(const StateSpace& model);
+
+/// Solution P of the discrete Lyapunov equation P = A P A^T + Q for stable A.
+/// Method: Smith's doubling, P <- P + A_k P A_k^T, A_k <- A_k^2, until A_k
+/// is negligible; O(n^3 log(log u / log rho(A))). Throws Error(Numerical)
+/// when A is not stable.
+Eigen::MatrixXd lyapunov(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q);
+
+/// The spectral summands of Akçay (2011) Section 3:
+/// S(z) = E + C (zI - A)^{-1} F + F^T (z^{-1} I - A^T)^{-1} C^T,
+/// E = C P C^T + D D^T, F = A P C^T + B D^T, P = A P A^T + B B^T.
+struct SpectralSummands {
+  Eigen::MatrixXd A, C, E, F, P;
+};
+
+SpectralSummands spectral_summands(const StateSpace& model);
+
+/// S(z) from the summands (on the unit circle: E + X + X^H, X = C (zI-A)^{-1} F).
+Eigen::MatrixXcd summand_spectrum(const SpectralSummands& s, cplx z);
+
+/// Akçay (2011) Eq. (3) sampled at omega_k = pi (k-1)/M, k = 1..M+1.
+/// Returns (m*m) x (M+1): column k holds vec(S_k) (column-major m x m).
+Eigen::MatrixXcd sample_spectrum(const StateSpace& model, int M);
+
+}  // namespace fdsid

@@ -1,0 +1,101 @@
+#include "fdsid/model.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "fdsid/error.hpp"
+
+namespace fdsid {
+
+const char* to_string(Domain d) { return d == Domain::Discrete ? "discrete" : "continuous"; }
+
+void validate(const StateSpace& m, const std::string& where) {
+  const auto n = m.A.rows();
+  auto fail = [&](const std::string& what) { throw Error(ErrorKind::Input, where, what); };
+  if (m.A.cols() != n) fail("A must be square, got " + std::to_string(n) + "x" + std::to_string(m.A.cols()));
+  if (m.B.rows() != n) fail("B must have " + std::to_string(n) + " rows (the order of A), got " + std::to_string(m.B.rows()));
+  if (m.C.cols() != n) fail("C must have " + std::to_string(n) + " columns (the order of A), got " + std::to_string(m.C.cols()));
+  if (m.D.rows() != m.C.rows() || m.D.cols() != m.B.cols())
+    fail("D must be " + std::to_string(m.C.rows()) + "x" + std::to_string(m.B.cols()) + ", got " +
+         std::to_string(m.D.rows()) + "x" + std::to_string(m.D.cols()));
+  if (m.D.size() == 0) fail("D is empty: a model needs at least one input and one output");
+  const std::pair<const char*, const Eigen::MatrixXd*> mats[] = {{"A", &m.A}, {"B", &m.B}, {"C", &m.C}, {"D", &m.D}};
+  for (const auto& [name, mat] : mats)
+    if (!mat->allFinite()) fail(std::string(name) + " has a NaN or infinite entry");
+  if (!(m.sample_time > 0) || !std::isfinite(m.sample_time)) fail("sample_time must be positive and finite");
+}
+
+Eigen::MatrixXcd transfer(const StateSpace& m, cplx z) {
+  const auto n = m.A.rows();
+  if (n == 0) return m.D.cast<cplx>();
+  Eigen::MatrixXcd zIA = -m.A.cast<cplx>();
+  zIA.diagonal().array() += z;
+  return m.D.cast<cplx>() + m.C.cast<cplx>() * zIA.partialPivLu().solve(m.B.cast<cplx>());
+}
+
+Eigen::MatrixXcd power_spectrum(const StateSpace& m, cplx z) {
+  return transfer(m, z) * transfer(m, 1.0 / z).transpose();
+}
+
+Eigen::VectorXcd poles(const StateSpace& m) {
+  if (m.A.rows() == 0) return {};
+  Eigen::VectorXcd ev = m.A.eigenvalues();
+  std::vector<cplx> v(ev.data(), ev.data() + ev.size());
+  std::sort(v.begin(), v.end(), [](cplx a, cplx b) {
+    if (std::abs(a) != std::abs(b)) return std::abs(a) < std::abs(b);
+    return std::arg(a) < std::arg(b);
+  });
+  return Eigen::Map<Eigen::VectorXcd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
+Eigen::MatrixXd lyapunov(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q) {
+  const auto n = A.rows();
+  if (n == 0) return Eigen::MatrixXd(0, 0);
+  const double rho = A.eigenvalues().cwiseAbs().maxCoeff();
+  if (!(rho < 1.0))
+    throw Error(ErrorKind::Numerical, "lyapunov", "A is not stable (spectral radius " + std::to_string(rho) + ")");
+  // Smith doubling: after k steps P = sum_{j < 2^k} A^j Q A^{jT}; the neglected
+  // tail is bounded by ||A^{2^k}||^2 ||P||, so stop when ||A_k||_F^2 <= u.
+  Eigen::MatrixXd P = Q, Ak = A;
+  for (int it = 0; it < 64; ++it) {
+    P += Ak * P * Ak.transpose();
+    Ak = (Ak * Ak).eval();
+    if (Ak.squaredNorm() <= 1e-32) break;
+  }
+  return 0.5 * (P + P.transpose());
+}
+
+SpectralSummands spectral_summands(const StateSpace& m) {
+  SpectralSummands s;
+  s.A = m.A;
+  s.C = m.C;
+  s.P = lyapunov(m.A, m.B * m.B.transpose());
+  s.E = m.C * s.P * m.C.transpose() + m.D * m.D.transpose();
+  s.F = m.A * s.P * m.C.transpose() + m.B * m.D.transpose();
+  return s;
+}
+
+Eigen::MatrixXcd summand_spectrum(const SpectralSummands& s, cplx z) {
+  const auto n = s.A.rows();
+  Eigen::MatrixXcd zIA = -s.A.cast<cplx>();
+  zIA.diagonal().array() += z;
+  Eigen::MatrixXcd X = s.C.cast<cplx>() * zIA.partialPivLu().solve(s.F.cast<cplx>());
+  Eigen::MatrixXcd zinvIA = -s.A.transpose().cast<cplx>();
+  zinvIA.diagonal().array() += 1.0 / z;
+  Eigen::MatrixXcd Y = s.F.transpose().cast<cplx>() * zinvIA.partialPivLu().solve(s.C.transpose().cast<cplx>());
+  (void)n;
+  return s.E.cast<cplx>() + X + Y;
+}
+
+Eigen::MatrixXcd sample_spectrum(const StateSpace& m, int M) {
+  const auto p = m.outputs();
+  Eigen::MatrixXcd out(p * p, M + 1);
+  for (int k = 0; k <= M; ++k) {
+    const double w = M_PI * k / M;
+    const Eigen::MatrixXcd S = power_spectrum(m, std::polar(1.0, w));
+    out.col(k) = Eigen::Map<const Eigen::VectorXcd>(S.data(), S.size());
+  }
+  return out;
+}
+
+}  // namespace fdsid

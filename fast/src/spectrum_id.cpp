@@ -1,0 +1,536 @@
+// Akçay (2011) Algorithm 1 and Van Overschee et al. (1997), double precision.
+#include "fdsid/spectrum_id.hpp"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <sstream>
+
+#include "fdsid/error.hpp"
+
+namespace fdsid {
+
+namespace {
+
+constexpr double kUnitRoundoff = std::numeric_limits<double>::epsilon() / 2;
+
+std::string fmt(double x, int digits = 4) {
+  std::ostringstream s;
+  s.precision(digits);
+  s << x;
+  return s.str();
+}
+
+// FFTW's planner is not thread-safe (fftw_execute is): plans are made and
+// destroyed under this lock so that Monte Carlo realisations may run in threads.
+std::mutex& fftw_planner_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+struct FftwFree {
+  void operator()(void* p) const { fftw_free(p); }
+};
+
+// A block of the real block-diagonal form of Â: a 1x1 block (real eigenvalue a)
+// or a 2x2 block [[a, b], [-b, a]] for the pair a ± ib.
+struct Block {
+  int start;
+  int size;
+  double a, b;
+};
+
+// χ(z) = Ĉ (zI - Â)^{-1} for block-diagonal Â, written into chi (m x n).
+// 2x2 block: (zI - [[a,b],[-b,a]])^{-1} = [[z-a, b], [-b, z-a]] / ((z-a)^2 + b^2).
+void resolvent_row(const Eigen::MatrixXd& C, const std::vector<Block>& blocks, cplx z, Eigen::MatrixXcd& chi) {
+  for (const Block& bl : blocks) {
+    if (bl.size == 1) {
+      chi.col(bl.start) = C.col(bl.start).cast<cplx>() / (z - bl.a);
+    } else {
+      const cplx za = z - bl.a;
+      const cplx det = za * za + bl.b * bl.b;
+      const cplx r11 = za / det, r12 = bl.b / det;
+      const auto c0 = C.col(bl.start).cast<cplx>();
+      const auto c1 = C.col(bl.start + 1).cast<cplx>();
+      chi.col(bl.start) = c0 * r11 - c1 * r12;
+      chi.col(bl.start + 1) = c0 * r12 + c1 * r11;
+    }
+  }
+}
+
+// Step 8 as a real linear least-squares problem. Unknowns θ = [vec F̂ (n m,
+// column-major), Ê_ab for a <= b]. The model Ŝ(z) = Ê + X + X^H, X = χ(z) F̂, is
+// Hermitian on |z| = 1, so ||Ŝ - S_k||_F^2 = ||Ŝ - H_k||_F^2 + const with H_k the
+// Hermitian part of S_k; per sample the equations are Re of the m diagonal
+// entries and Re, Im of the m(m-1)/2 entries above it, the latter weighted by
+// √2 because each stands for itself and its mirror image.
+class SummandDesign {
+ public:
+  SummandDesign(const Eigen::MatrixXd& C, const std::vector<Block>& blocks, int m)
+      : C_(C), blocks_(blocks), m_(m), n_(static_cast<int>(C.cols())), chi_(m, C.cols()) {}
+
+  int unknowns() const { return n_ * m_ + m_ * (m_ + 1) / 2; }
+  int rows_per_sample() const { return m_ * m_; }
+
+  // Writes the rows of sample z into D (rows_per_sample() x unknowns()) and, when
+  // data != nullptr, the matching right-hand side into y.
+  void rows(cplx z, const SpectrumData* data, int k, Eigen::Ref<Eigen::MatrixXd> D, Eigen::Ref<Eigen::VectorXd> y) {
+    resolvent_row(C_, blocks_, z, chi_);
+    D.setZero();
+    const double w = std::sqrt(2.0);
+    int row = 0;
+    for (int a = 0; a < m_; ++a) {
+      for (int b = a; b < m_; ++b) {
+        // Ŝ_ab = E_ab + sum_c χ_ac F_cb + sum_c conj(χ_bc) F_ca
+        const int e_index = n_ * m_ + e_position(a, b);
+        if (a == b) {
+          for (int c = 0; c < n_; ++c) D(row, c + n_ * a) = 2.0 * chi_(a, c).real();
+          D(row, e_index) = 1.0;
+          if (data) y(row) = data->at(a, a, k).real();
+          ++row;
+        } else {
+          for (int c = 0; c < n_; ++c) {
+            D(row, c + n_ * b) += w * chi_(a, c).real();
+            D(row, c + n_ * a) += w * chi_(b, c).real();
+            D(row + 1, c + n_ * b) += w * chi_(a, c).imag();
+            D(row + 1, c + n_ * a) -= w * chi_(b, c).imag();
+          }
+          D(row, e_index) = w;
+          if (data) {
+            const cplx h = 0.5 * (data->at(a, b, k) + std::conj(data->at(b, a, k)));
+            y(row) = w * h.real();
+            y(row + 1) = w * h.imag();
+          }
+          row += 2;
+        }
+      }
+    }
+  }
+
+  int e_position(int a, int b) const {  // a <= b, row-wise upper triangle
+    return a * m_ - a * (a - 1) / 2 + (b - a);
+  }
+
+ private:
+  const Eigen::MatrixXd& C_;
+  const std::vector<Block>& blocks_;
+  int m_, n_;
+  Eigen::MatrixXcd chi_;
+};
+
+cplx grid_point(int k, int M) { return std::polar(1.0, M_PI * k / M); }
+
+// Hermitian spectrum value from the summand coefficients θ at row block D.
+Eigen::MatrixXcd unpack_hermitian(const Eigen::VectorXd& values, int m) {
+  // values: the rows of the design times θ -- diagonal reals, then (Re, Im)·√2 pairs.
+  Eigen::MatrixXcd S(m, m);
+  int row = 0;
+  const double w = std::sqrt(2.0);
+  for (int a = 0; a < m; ++a)
+    for (int b = a; b < m; ++b) {
+      if (a == b) {
+        S(a, a) = values(row++);
+      } else {
+        S(a, b) = cplx(values(row), values(row + 1)) / w;
+        S(b, a) = std::conj(S(a, b));
+        row += 2;
+      }
+    }
+  return S;
+}
+
+double min_hermitian_eigenvalue(const Eigen::MatrixXcd& S) {
+  if (S.rows() == 1) return S(0, 0).real();
+  return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXcd>(S, Eigen::EigenvaluesOnly).eigenvalues()(0);
+}
+
+// Symmetric square root and inverse square root of a symmetric positive-definite matrix.
+void sqrt_spd(const Eigen::MatrixXd& X, Eigen::MatrixXd& root, Eigen::MatrixXd& inv_root) {
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(X);
+  const Eigen::VectorXd l = es.eigenvalues().cwiseSqrt();
+  root = es.eigenvectors() * l.asDiagonal() * es.eigenvectors().transpose();
+  inv_root = es.eigenvectors() * l.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+}
+
+Eigen::MatrixXd riccati_map(const SpectralSummands& s, const Eigen::MatrixXd& P) {
+  const Eigen::MatrixXd K = s.F - s.A * P * s.C.transpose();
+  const Eigen::MatrixXd R = s.E - s.C * P * s.C.transpose();
+  return s.A * P * s.A.transpose() + K * R.ldlt().solve(K.transpose());
+}
+
+double riccati_residual(const SpectralSummands& s, const Eigen::MatrixXd& P) {
+  const double scale = std::max(P.norm(), s.F.norm() * s.F.norm() / std::max(s.E.norm(), 1e-300));
+  return (P - riccati_map(s, P)).norm() / std::max(scale, 1e-300);
+}
+
+// Step 9 by SDA. With X = -P the equation
+//   P = A P A^T + (F - A P C^T)(E - C P C^T)^{-1}(F - A P C^T)^T
+// becomes the control-type DARE X = Â^T X (I + G X)^{-1} Â + H with
+//   Â = A^T - C^T E^{-1} F^T,  G = C^T E^{-1} C,  H = -F E^{-1} F^T,
+// whose stabilising solution makes A - K C (K = (F - APC^T)(E - CPC^T)^{-1})
+// stable, i.e. the spectral factor minimum phase. Doubling:
+//   W = I + G_k H_k, A_{k+1} = A_k W^{-1} A_k, G_{k+1} = G_k + A_k W^{-1} G_k A_k^T,
+//   H_{k+1} = H_k + A_k^T H_k W^{-1} A_k,  H_k -> X quadratically.
+bool riccati_sda(const SpectralSummands& s, Eigen::MatrixXd& P, int& iterations) {
+  const auto n = s.A.rows();
+  const Eigen::LDLT<Eigen::MatrixXd> Einv(s.E);
+  Eigen::MatrixXd Ak = s.A.transpose() - s.C.transpose() * Einv.solve(s.F.transpose());
+  Eigen::MatrixXd Gk = s.C.transpose() * Einv.solve(s.C);
+  Eigen::MatrixXd Hk = -s.F * Einv.solve(s.F.transpose());
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+  for (iterations = 1; iterations <= 100; ++iterations) {
+    const Eigen::PartialPivLU<Eigen::MatrixXd> W(I + Gk * Hk);
+    if (!(std::abs(W.determinant()) > 1e-12)) return false;
+    const Eigen::MatrixXd WA = W.solve(Ak);          // W^{-1} A_k
+    const Eigen::MatrixXd WG = W.solve(Gk);          // W^{-1} G_k
+    const Eigen::MatrixXd Anext = Ak * WA;
+    const Eigen::MatrixXd Gnext = Gk + Ak * WG * Ak.transpose();
+    const Eigen::MatrixXd Hnext = Hk + Ak.transpose() * Hk * WA;
+    const double change = (Hnext - Hk).norm();
+    Ak = Anext;
+    Gk = 0.5 * (Gnext + Gnext.transpose());
+    Hk = 0.5 * (Hnext + Hnext.transpose());
+    if (!Hk.allFinite()) return false;
+    if (change <= 4 * kUnitRoundoff * Hk.norm() || Ak.norm() <= kUnitRoundoff) break;
+  }
+  P = -Hk;
+  return iterations <= 100;
+}
+
+// Fall-back: the Riccati difference (Kalman filter) iteration from P = 0, which
+// increases monotonically to the minimal solution when Ŝ > 0 on the circle.
+bool riccati_kalman(const SpectralSummands& s, Eigen::MatrixXd& P, int& iterations) {
+  P = Eigen::MatrixXd::Zero(s.A.rows(), s.A.rows());
+  for (iterations = 1; iterations <= 100000; ++iterations) {
+    const Eigen::MatrixXd next = riccati_map(s, P);
+    if (!next.allFinite()) return false;
+    const double change = (next - P).norm();
+    P = 0.5 * (next + next.transpose());
+    if (change <= 4 * kUnitRoundoff * std::max(P.norm(), 1e-300)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+const char* to_string(Method m) { return m == Method::Akcay2011 ? "akcay2011" : "vo1997"; }
+const char* to_string(Extension e) { return e == Extension::HermitianPart ? "hermitian-part" : "conjugate"; }
+
+void default_pr(int M, int n, int& p, int& r) {
+  const int N = 2 * M;
+  if (n <= 0) {
+    p = r = std::min(50, M);
+  } else {
+    p = std::max(2 * n + 1, std::min(50, M));
+    r = std::max(2 * n, std::min(50, N - p));
+  }
+}
+
+void check_pr(int N, int n, int p, int r) {
+  auto fail = [&](const std::string& what) {
+    throw Error(ErrorKind::Dimension, "step 2",
+                what + " (p = " + std::to_string(p) + ", r = " + std::to_string(r) + ", n = " + std::to_string(n) +
+                    ", N = 2M = " + std::to_string(N) + "; Algorithm 1 needs p > 2n, r >= 2n, p + r <= N)");
+  };
+  if (p < 1 || r < 1) fail("p and r must be positive");
+  if (p <= 2 * n) fail("p must exceed 2n");
+  if (r < 2 * n) fail("r must be at least 2n");
+  if (static_cast<long long>(p) + r > N) fail("data too short: p + r exceeds N");
+}
+
+Eigen::MatrixXd fourier_coefficients(const SpectrumData& data, Extension ext) {
+  const int m = data.m, M = data.M, N = 2 * M, mm = m * m;
+  if (M < 1) throw Error(ErrorKind::Dimension, "step 1", "need at least 2 spectrum samples (M >= 1)");
+  // Input of the complex-to-real transforms: M+1 Hermitian-extended samples per entry.
+  std::unique_ptr<fftw_complex, FftwFree> in(fftw_alloc_complex(static_cast<size_t>(mm) * (M + 1)));
+  std::unique_ptr<double, FftwFree> out(fftw_alloc_real(static_cast<size_t>(mm) * N));
+  if (!in || !out) throw Error(ErrorKind::Numerical, "step 1", "out of memory for the FFT of length " + std::to_string(N));
+  for (int k = 0; k <= M; ++k)
+    for (int b = 0; b < m; ++b)
+      for (int a = 0; a < m; ++a) {
+        const cplx v = ext == Extension::HermitianPart ? 0.5 * (data.at(a, b, k) + std::conj(data.at(b, a, k)))
+                                                       : data.at(a, b, k);
+        fftw_complex& dst = in.get()[static_cast<size_t>(k) * mm + a + m * b];
+        dst[0] = v.real();
+        dst[1] = v.imag();
+      }
+  fftw_plan plan;
+  {
+    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
+    // Eq. (20): ŝ_k = (1/N) sum_j e^{+i 2π jk/N} S_j is FFTW's unnormalised backward
+    // transform; c2r reads samples 0..M and supplies S_{N-j} = conj(S_j).
+    plan = fftw_plan_many_dft_c2r(1, &N, mm, in.get(), nullptr, mm, 1, out.get(), nullptr, mm, 1, FFTW_ESTIMATE);
+  }
+  fftw_execute(plan);
+  {
+    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
+    fftw_destroy_plan(plan);
+  }
+  Eigen::MatrixXd shat = Eigen::Map<Eigen::MatrixXd>(out.get(), mm, N) / static_cast<double>(N);
+  return shat;
+}
+
+namespace {
+Eigen::MatrixXd hankel(const Eigen::MatrixXd& shat, int m, int p, int r, int offset) {
+  // Block (k, l), 1-based, is ŝ_{offset + k + l - 1}.
+  Eigen::MatrixXd H(p * m, r * m);
+  for (int l = 0; l < r; ++l)
+    for (int k = 0; k < p; ++k)
+      H.block(k * m, l * m, m, m) = Eigen::Map<const Eigen::MatrixXd>(shat.col(offset + k + l + 1).data(), m, m);
+  return H;
+}
+}  // namespace
+
+Eigen::MatrixXd akcay_matrix(const Eigen::MatrixXd& shat, int m, int p, int r) {
+  const int N = static_cast<int>(shat.cols());
+  return hankel(shat, m, p, r, 0) + hankel(shat, m, p, r, N - p - r);
+}
+
+Eigen::MatrixXd van_overschee_matrix(const Eigen::MatrixXd& shat, int m, int p, int r) {
+  return hankel(shat, m, p, r, 0);
+}
+
+int order_from_singular_values(const Eigen::VectorXd& sv, int n_max, int& gap_index, double& gap_ratio) {
+  int best = 0;
+  gap_ratio = 0.0;
+  // Singular values below the rounding level of the SVD, sqrt(size) u sigma_1,
+  // are zero to working precision; ratios between them carry no information.
+  const double floor = std::sqrt(static_cast<double>(sv.size())) * kUnitRoundoff * (sv.size() ? sv(0) : 0.0);
+  for (int n = 1; n <= n_max && 2 * n < sv.size(); ++n) {
+    const double ratio = std::max(sv(2 * n - 1), floor) / std::max({sv(2 * n), floor, std::numeric_limits<double>::min()});
+    if (ratio > gap_ratio) {
+      gap_ratio = ratio;
+      best = n;
+    }
+  }
+  if (best == 0) throw Error(ErrorKind::Order, "step 4", "too few singular values to read an order from");
+  gap_index = 2 * best;
+  return best;
+}
+
+SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions& opt) {
+  const int m = data.m, M = data.M, N = 2 * M;
+  if (m < 1) throw Error(ErrorKind::Input, "spectrum", "need at least one channel");
+  if (data.S.rows() != m * m || data.S.cols() != M + 1)
+    throw Error(ErrorKind::Input, "spectrum", "sample matrix is not (m*m) x (M+1)");
+  if (!data.S.allFinite()) throw Error(ErrorKind::Input, "spectrum", "a sample is NaN or infinite");
+  if (opt.order < 0) throw Error(ErrorKind::Order, "step 4", "order must be positive");
+
+  SpectrumResult res;
+  res.method = opt.method;
+  res.extension = opt.extension;
+  res.N = N;
+  int p = opt.p, r = opt.r;
+  {
+    int dp, dr;
+    default_pr(M, opt.order, dp, dr);
+    if (p == 0) p = dp;
+    if (r == 0) r = dr;
+  }
+  check_pr(N, std::max(opt.order, 1), p, r);
+  res.p = p;
+  res.r = r;
+
+  // Steps 1-2: extension and inverse DFT (Eq. 20).
+  const Eigen::MatrixXd shat = fourier_coefficients(data, opt.extension);
+  // Step 3: SVD of 𝒴 (Eq. 19) or of Ĝ_p F_r (Eq. 13).
+  const Eigen::MatrixXd Y =
+      opt.method == Method::Akcay2011 ? akcay_matrix(shat, m, p, r) : van_overschee_matrix(shat, m, p, r);
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(Y, Eigen::ComputeThinU);
+  res.singular_values = svd.singularValues();
+
+  // Step 4: order.
+  int n = opt.order;
+  if (n == 0) {
+    const int n_max = std::min((p - 1) / 2, r / 2);
+    n = order_from_singular_values(res.singular_values, n_max, res.gap_index, res.gap_ratio);
+    res.order_from_data = true;
+  } else {
+    res.gap_index = 2 * n;
+    res.gap_ratio = 2 * n < res.singular_values.size()
+                        ? res.singular_values(2 * n - 1) / std::max(res.singular_values(2 * n), 1e-300)
+                        : std::numeric_limits<double>::infinity();
+  }
+  check_pr(N, n, p, r);
+  res.order = n;
+  const Eigen::MatrixXd U = svd.matrixU().leftCols(2 * n);
+
+  // Step 5: Ã = (J_d U)^† J_u U -- the shift equations, solved by Householder QR.
+  const int rows = (p - 1) * m;
+  const Eigen::MatrixXd Atilde = U.topRows(rows).householderQr().solve(U.bottomRows(rows));
+  if (!Atilde.allFinite()) throw Error(ErrorKind::Numerical, "step 5", "shift equations gave a non-finite A");
+
+  // Step 6: eigen-decomposition of Ã and the split |λ| < 1 (causal) / > 1.
+  Eigen::EigenSolver<Eigen::MatrixXd> es(Atilde);
+  if (es.info() != Eigen::Success) throw Error(ErrorKind::Split, "step 6", "eigen-decomposition of A did not converge");
+  const Eigen::VectorXcd lambda = es.eigenvalues();
+  const Eigen::MatrixXcd V = es.eigenvectors();
+  const Eigen::MatrixXcd W = V.inverse();  // rows: left eigenvectors with y_i^H x_i = 1
+  const double normA = Atilde.norm();
+  std::vector<int> stable;
+  double margin = std::numeric_limits<double>::infinity();
+  std::ostringstream moduli;
+  for (int i = 0; i < 2 * n; ++i) {
+    const double mod = std::abs(lambda(i));
+    const double kappa = V.col(i).norm() * W.row(i).norm();  // eigenvalue condition number
+    // |λ| can only be trusted to about κ u ||Ã||: a split closer than 10 times that
+    // to the circle is not a split.
+    const double resolution = 10.0 * kappa * kUnitRoundoff * normA;
+    margin = std::min(margin, std::abs(mod - 1.0));
+    if (std::abs(mod - 1.0) <= resolution || !std::isfinite(mod)) {
+      throw Error(ErrorKind::Split, "step 6",
+                  "eigenvalue " + fmt(lambda(i).real(), 10) + (lambda(i).imag() < 0 ? "" : "+") +
+                      fmt(lambda(i).imag(), 10) + "i of A has modulus " + fmt(mod, 12) +
+                      ", within its rounding error " + fmt(resolution, 3) + " of the unit circle");
+    }
+    moduli << (i ? ", " : "") << fmt(mod, 4);
+    if (mod < 1.0) stable.push_back(i);
+  }
+  res.split_margin = margin;
+  if (static_cast<int>(stable.size()) != n)
+    throw Error(ErrorKind::Split, "step 6",
+                "no stable/antistable split: " + std::to_string(stable.size()) + " of the 2n = " +
+                    std::to_string(2 * n) + " eigenvalues of A lie inside the unit circle, n = " + std::to_string(n) +
+                    " needed (moduli " + moduli.str() + ")");
+
+  // Step 7: Â = Σ_c and Ĉ = J_f U_{2n} Π_c, in the real block-diagonal basis
+  // T = [x] for real λ, [Re x, Im x] for λ = a + ib, b > 0 (Ã x = λ x gives
+  // Ã [Re x, Im x] = [Re x, Im x] [[a, b], [-b, a]]).
+  Eigen::MatrixXd T(2 * n, n);
+  std::vector<Block> blocks;
+  Eigen::MatrixXd Ahat = Eigen::MatrixXd::Zero(n, n);
+  int col = 0;
+  for (int i : stable) {
+    const cplx l = lambda(i);
+    if (l.imag() == 0.0) {
+      Eigen::VectorXd x = V.col(i).real();
+      T.col(col) = x / x.norm();
+      Ahat(col, col) = l.real();
+      blocks.push_back({col, 1, l.real(), 0.0});
+      ++col;
+    } else if (l.imag() > 0.0) {
+      if (col + 2 > n)
+        throw Error(ErrorKind::Split, "step 6", "complex eigenvalue without its conjugate among the stable ones");
+      const double s = V.col(i).norm();
+      T.col(col) = V.col(i).real() / s;
+      T.col(col + 1) = V.col(i).imag() / s;
+      Ahat(col, col) = l.real();
+      Ahat(col, col + 1) = l.imag();
+      Ahat(col + 1, col) = -l.imag();
+      Ahat(col + 1, col + 1) = l.real();
+      blocks.push_back({col, 2, l.real(), l.imag()});
+      col += 2;
+    }
+  }
+  if (col != n) throw Error(ErrorKind::Split, "step 6", "stable eigenvalues do not form conjugate pairs");
+  const Eigen::MatrixXd Chat = U.topRows(m) * T;
+
+  // Step 8: Ê, F̂ by least squares over all M+1 samples (chunked Householder QR).
+  SummandDesign design(Chat, blocks, m);
+  const int q = design.unknowns(), rps = design.rows_per_sample();
+  const int chunk = std::max(1, 512 / rps);
+  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(0, q + 1);
+  Eigen::MatrixXd work;
+  for (int k0 = 0; k0 <= M; k0 += chunk) {
+    const int kn = std::min(chunk, M + 1 - k0);
+    work.resize(R.rows() + kn * rps, q + 1);
+    work.topRows(R.rows()) = R;
+    for (int j = 0; j < kn; ++j) {
+      const int k = k0 + j;
+      auto blk = work.block(R.rows() + j * rps, 0, rps, q + 1);
+      Eigen::VectorXd y(rps);
+      design.rows(grid_point(k, M), &data, k, blk.leftCols(q), y);
+      blk.col(q) = y;
+    }
+    Eigen::HouseholderQR<Eigen::MatrixXd> qr(work);
+    const int keep = std::min<int>(static_cast<int>(work.rows()), q + 1);
+    R = qr.matrixQR().topRows(keep).triangularView<Eigen::Upper>();
+  }
+  if (R.rows() < q) throw Error(ErrorKind::Dimension, "step 8", "fewer equations than unknowns in the E, F fit");
+  const Eigen::MatrixXd Rq = R.topLeftCorner(q, q);
+  const double rmax = Rq.diagonal().cwiseAbs().maxCoeff(), rmin = Rq.diagonal().cwiseAbs().minCoeff();
+  if (!(rmin > 1e3 * kUnitRoundoff * rmax))
+    throw Error(ErrorKind::Numerical, "step 8", "E, F least-squares problem is rank deficient (|r_min|/|r_max| = " +
+                                                    fmt(rmin / rmax, 3) + ")");
+  const Eigen::VectorXd theta = Rq.triangularView<Eigen::Upper>().solve(R.col(q).head(q));
+
+  SpectralSummands& s = res.summands;
+  s.A = Ahat;
+  s.C = Chat;
+  s.F = Eigen::Map<const Eigen::MatrixXd>(theta.data(), n, m);
+  s.E.resize(m, m);
+  for (int a = 0; a < m; ++a)
+    for (int b = a; b < m; ++b) s.E(a, b) = s.E(b, a) = theta(n * m + design.e_position(a, b));
+
+  // Ŝ must be positive on the grid, or no spectral factor exists.
+  {
+    Eigen::MatrixXd D(rps, q);
+    Eigen::VectorXd dummy(rps);
+    double worst = std::numeric_limits<double>::infinity();
+    int worst_k = 0;
+    for (int k = 0; k <= M; ++k) {
+      design.rows(grid_point(k, M), nullptr, k, D, dummy);
+      const double v = min_hermitian_eigenvalue(unpack_hermitian(D * theta, m));
+      if (v < worst) {
+        worst = v;
+        worst_k = k;
+      }
+    }
+    res.min_spectrum = worst;
+    if (!(worst > 0.0))
+      throw Error(ErrorKind::Positivity, "step 8",
+                  "estimated spectrum is not positive on the grid: smallest eigenvalue " + fmt(worst, 4) +
+                      " at omega = " + fmt(M_PI * worst_k / M, 6) + " rad/sample (k = " + std::to_string(worst_k + 1) +
+                      ")");
+  }
+  {
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eE(s.E, Eigen::EigenvaluesOnly);
+    if (!(eE.eigenvalues()(0) > 0.0))
+      throw Error(ErrorKind::Positivity, "step 9", "E is not positive definite (smallest eigenvalue " +
+                                                       fmt(eE.eigenvalues()(0), 4) + ")");
+  }
+
+  // Step 9: Riccati equation.
+  Eigen::MatrixXd P;
+  int its = 0;
+  bool ok = riccati_sda(s, P, its);
+  res.riccati_method = "sda";
+  if (ok) {
+    const Eigen::MatrixXd Rinn = s.E - s.C * P * s.C.transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eR(Rinn, Eigen::EigenvaluesOnly);
+    ok = eR.eigenvalues()(0) > 0.0 && riccati_residual(s, P) <= 1e-8;
+  }
+  if (!ok) {
+    ok = riccati_kalman(s, P, its);
+    res.riccati_method = "riccati-difference-iteration";
+  }
+  if (!ok) throw Error(ErrorKind::Riccati, "step 9", "no stabilising solution found (SDA and Kalman iteration failed)");
+  s.P = P;
+  res.riccati_iterations = its;
+  res.riccati_residual = riccati_residual(s, P);
+  const Eigen::MatrixXd Rinn = s.E - s.C * P * s.C.transpose();
+  {
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eR(Rinn, Eigen::EigenvaluesOnly);
+    if (!(eR.eigenvalues()(0) > 0.0))
+      throw Error(ErrorKind::Positivity, "step 9",
+                  "E - C P C^T is not positive definite (smallest eigenvalue " + fmt(eR.eigenvalues()(0), 4) + ")");
+  }
+  Eigen::MatrixXd Dhat, Dinv;
+  sqrt_spd(Rinn, Dhat, Dinv);
+  StateSpace& g = res.model;
+  g.domain = Domain::Discrete;
+  g.sample_time = 1.0;
+  g.A = Ahat;
+  g.C = Chat;
+  g.B = (s.F - Ahat * P * Chat.transpose()) * Dinv;
+  g.D = Dhat;
+  if (!g.B.allFinite() || !g.D.allFinite())
+    throw Error(ErrorKind::Numerical, "step 9", "B or D is not finite");
+  return res;
+}
+
+}  // namespace fdsid
