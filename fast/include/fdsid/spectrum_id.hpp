@@ -90,7 +90,7 @@ struct SpectrumResult {
 /// M+1 power-spectrum samples on the uniform grid ω_k = π(k-1)/M.
 ///
 /// Method: 𝒴 by Eq. (19) from the inverse DFT (Eq. 20) of the extended data
-/// (FFTW); range space by SVD (step 3); A from the shift equations (step 5) by
+/// (FFTW); range space by Jacobi SVD (step 3); A from the shift equations (step 5) by
 /// Householder QR; stable/antistable split by the eigen-decomposition of Ã
 /// (step 6), expressed in a real block-diagonal basis (1x1 blocks for real
 /// eigenvalues, [[a, b], [-b, a]] for a ± ib) so that all of Â, Ĉ, Ê, F̂, B̂, D̂
