@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Installs fdsid's build and test dependencies from Debian 12 packages.
+set -euo pipefail
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends \
+  build-essential cmake pkg-config git \
+  libeigen3-dev libfftw3-dev nlohmann-json3-dev libcli11-dev \
+  libgtest-dev libbenchmark-dev librapidcheck-dev libboost-dev gcovr >/dev/null
