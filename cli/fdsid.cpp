@@ -2,12 +2,14 @@
 // comes from the fast/ library.
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "fdsid/error.hpp"
 #include "fdsid/io.hpp"
@@ -134,7 +136,12 @@ int run_identify_spectrum(const std::string& json_path, const std::string& data_
   so.r = r;
   so.extension = parse_extension(extension);
   const fdsid::SpectrumData data = fdsid::read_spectrum_csv(data_path);
-  const fdsid::SpectrumResult res = fdsid::identify_spectrum(data, so);
+  fdsid::SpectrumResult res;
+  try {
+    res = fdsid::identify_spectrum(data, so);
+  } catch (const fdsid::Error& e) {
+    throw e.within(data_path);
+  }
   json j = fdsid::result_to_json(res);
   j["data"] = data_path;
   out << "identified order " << res.order << " (" << (res.order_from_data ? "read at" : "given; gap at")
@@ -151,8 +158,19 @@ int run_identify_spectrum(const std::string& json_path, const std::string& data_
 
 int run_sample_spectrum(const std::string& model_path, int M, double epsilon, std::uint64_t seed,
                         const std::string& out_path) {
+  // 10^7 samples make a ~600 MB CSV; beyond that the text file is no way to carry them.
+  if (M < 1 || M > 10000000)
+    throw fdsid::Error(fdsid::ErrorKind::Input, "--M", std::to_string(M) + " is outside 1 .. 10000000");
+  if (!(std::isfinite(epsilon) && epsilon >= 0))
+    throw fdsid::Error(fdsid::ErrorKind::Input, "--epsilon", "must be a finite number >= 0");
   const fdsid::StateSpace model = fdsid::read_model(model_path);
-  if (M < 1) throw fdsid::Error(fdsid::ErrorKind::Input, "--M", "must be at least 1");
+  if (model.order() > 0) {
+    const double rho = fdsid::poles(model).cwiseAbs().maxCoeff();
+    if (!(rho < 1.0))
+      throw fdsid::Error(fdsid::ErrorKind::Input, model_path,
+                         "A has a pole of modulus " + std::to_string(rho) +
+                             " (not inside the unit circle): the power spectrum of an unstable model is not defined");
+  }
   if (model.inputs() != model.outputs())
     throw fdsid::Error(fdsid::ErrorKind::Input, model_path, "a power spectrum needs a square model (as many inputs as outputs)");
   fdsid::SpectrumData d;
@@ -215,6 +233,22 @@ int main(int argc, char** argv) {
   smp->add_option("--seed", seed, "random seed of the noise");
   smp->add_option("--out", out_path, "CSV output (- = stdout)");
 
+  // CLI11 reports an unknown subcommand as "A subcommand is required"; name it.
+  {
+    const std::vector<std::string> top = {"reproduce", "identify-spectrum", "sample-spectrum"};
+    const std::vector<std::string> targets = {"table1", "table2"};
+    auto unknown = [](const std::string& word, const std::vector<std::string>& known) {
+      return !word.empty() && word[0] != '-' && std::find(known.begin(), known.end(), word) == known.end();
+    };
+    if (argc > 1 && unknown(argv[1], top)) {
+      std::cerr << "fdsid: unknown subcommand \"" << argv[1] << "\" (run fdsid --help for the list)\n";
+      return 2;
+    }
+    if (argc > 2 && std::string(argv[1]) == "reproduce" && unknown(argv[2], targets)) {
+      std::cerr << "fdsid: reproduce: unknown target \"" << argv[2] << "\" (expected table1 or table2)\n";
+      return 2;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -227,6 +261,9 @@ int main(int argc, char** argv) {
   }
 
   try {
+    for (const CLI::App* sub : {t1, t2, ids})
+      if (sub->parsed() && sub->count("--json") > 0 && json_path.empty())
+        throw fdsid::Error(fdsid::ErrorKind::Input, "--json", "empty path (use - for stdout)");
     if (t1->parsed()) return run_table1(json_path);
     if (t2->parsed()) {
       t2o.extension = parse_extension(t2_ext);

@@ -17,6 +17,6 @@ const char* to_string(ErrorKind kind) {
 }
 
 Error::Error(ErrorKind kind, std::string where, const std::string& message)
-    : std::runtime_error(where + ": " + message), kind_(kind), where_(std::move(where)) {}
+    : std::runtime_error(where + ": " + message), kind_(kind), where_(std::move(where)), message_(message) {}
 
 }  // namespace fdsid

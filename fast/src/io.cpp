@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -118,7 +119,15 @@ StateSpace model_from_json(const nlohmann::json& j, const std::string& where) {
   return m;
 }
 
+namespace {
+void check_readable_file(const std::string& path, const char* what) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) input_error(path, std::string("is a directory, not a ") + what);
+}
+}  // namespace
+
 StateSpace read_model(const std::string& path) {
+  check_readable_file(path, "model file");
   std::ifstream f(path);
   if (!f) input_error(path, "cannot open model file");
   nlohmann::json j;
@@ -217,6 +226,7 @@ SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
 }
 
 SpectrumData read_spectrum_csv(const std::string& path) {
+  check_readable_file(path, "spectrum file");
   std::ifstream f(path);
   if (!f) input_error(path, "cannot open spectrum file");
   return parse_spectrum_csv(f, path);

@@ -337,6 +337,18 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
 
   // Steps 1-2: extension and inverse DFT (Eq. 20).
   const Eigen::MatrixXd shat = fourier_coefficients(data, opt.extension);
+  // ŝ_0 is the zero-lag covariance R_0 = E + aliasing (Eq. 20 at k = 0): a power
+  // spectrum has a positive definite one. Individual noisy samples may dip below
+  // zero where S is small (Section 4's data do), so this is the check on the data.
+  {
+    const Eigen::Map<const Eigen::MatrixXd> s0(shat.col(0).data(), m, m);
+    const Eigen::MatrixXd h = 0.5 * (s0 + s0.transpose());
+    const double l0 = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(h, Eigen::EigenvaluesOnly).eigenvalues()(0);
+    if (!(l0 > 0.0))
+      throw Error(ErrorKind::Positivity, "step 2",
+                  "data are not a power spectrum: the mean of the samples (zero-lag covariance) is not positive "
+                  "definite (smallest eigenvalue " + fmt(l0, 4) + ")");
+  }
   // Step 3: SVD of 𝒴 (Eq. 19) or of Ĝ_p F_r (Eq. 13).
   const Eigen::MatrixXd Y =
       opt.method == Method::Akcay2011 ? akcay_matrix(shat, m, p, r) : van_overschee_matrix(shat, m, p, r);

@@ -32,10 +32,15 @@ class Error : public std::runtime_error {
   ErrorKind kind() const noexcept { return kind_; }
   /// The step ("step 6") or the input ("spectrum.csv line 12") that failed.
   const std::string& where() const noexcept { return where_; }
+  /// What is wrong, without the location.
+  const std::string& message() const noexcept { return message_; }
+  /// The same error located inside `outer` (e.g. the data file a step ran on).
+  Error within(const std::string& outer) const { return Error(kind_, outer + ": " + where_, message_); }
 
  private:
   ErrorKind kind_;
   std::string where_;
+  std::string message_;
 };
 
 }  // namespace fdsid

@@ -1,0 +1,662 @@
+// Command-line tests of the fdsid executable (FDSID_EXE, set by
+// tests/cli_tests.cmake). Every test runs fdsid as a child process and checks
+// the contracts of ../shared/CONTRACTS.md: exit status 0 on success and 2 on
+// bad input, with exactly one line on stderr naming the file, line or field and
+// what is wrong. Input files are generated at test time in a fresh temporary
+// folder that the fixture removes afterwards.
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <initializer_list>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+const std::string kExe = FDSID_EXE;
+const std::string kPaperModel = std::string(FDSID_SOURCE_DIR) + "/fixtures/systems/akcay2011.json";
+
+// ---------------------------------------------------------------------------
+// Running fdsid
+
+struct RunResult {
+  int status = -1;         ///< exit status, or 128 + signal when killed
+  bool timed_out = false;  ///< killed after the time limit
+  std::string out, err;    ///< everything written to stdout / stderr
+  std::string command;     ///< the command line, for failure messages
+};
+
+/// Runs fdsid with args (stdin from /dev/null), captures stdout and stderr, and
+/// kills it after timeout_s seconds so that a hang fails the test instead of
+/// blocking ctest.
+RunResult run_fdsid(const std::vector<std::string>& args, int timeout_s = 120) {
+  RunResult res;
+  res.command = kExe;
+  for (const auto& a : args) res.command += " " + a;
+
+  int out_pipe[2], err_pipe[2];
+  if (pipe(out_pipe) != 0 || pipe(err_pipe) != 0) {
+    res.err = "pipe() failed";
+    return res;
+  }
+  const pid_t pid = fork();
+  if (pid < 0) {
+    res.err = "fork() failed";
+    return res;
+  }
+  if (pid == 0) {
+    const int devnull = open("/dev/null", O_RDONLY);
+    if (devnull >= 0) dup2(devnull, STDIN_FILENO);
+    dup2(out_pipe[1], STDOUT_FILENO);
+    dup2(err_pipe[1], STDERR_FILENO);
+    close(out_pipe[0]);
+    close(out_pipe[1]);
+    close(err_pipe[0]);
+    close(err_pipe[1]);
+    std::vector<char*> argv;
+    argv.push_back(const_cast<char*>(kExe.c_str()));
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    execv(kExe.c_str(), argv.data());
+    _exit(127);
+  }
+  close(out_pipe[1]);
+  close(err_pipe[1]);
+
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(timeout_s);
+  pollfd fds[2] = {{out_pipe[0], POLLIN, 0}, {err_pipe[0], POLLIN, 0}};
+  std::string* sinks[2] = {&res.out, &res.err};
+  int open_fds = 2;
+  char buf[4096];
+  while (open_fds > 0) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      res.timed_out = true;
+      kill(pid, SIGKILL);
+      break;
+    }
+    const int ready = poll(fds, 2, static_cast<int>(std::min<long long>(left.count(), 1000)));
+    if (ready < 0 && errno != EINTR) break;
+    for (int i = 0; i < 2; ++i) {
+      if (fds[i].fd < 0 || !(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+      const ssize_t n = read(fds[i].fd, buf, sizeof buf);
+      if (n > 0) {
+        sinks[i]->append(buf, static_cast<size_t>(n));
+      } else if (n == 0 || errno != EINTR) {
+        close(fds[i].fd);
+        fds[i].fd = -1;
+        --open_fds;
+      }
+    }
+  }
+  for (auto& f : fds)
+    if (f.fd >= 0) close(f.fd);
+  int wstatus = 0;
+  while (waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFEXITED(wstatus)) res.status = WEXITSTATUS(wstatus);
+  else if (WIFSIGNALED(wstatus)) res.status = 128 + WTERMSIG(wstatus);
+  return res;
+}
+
+std::string describe(const RunResult& r) {
+  std::ostringstream s;
+  s << "command: " << r.command << "\nexit status: " << r.status << (r.timed_out ? " (killed: timed out)" : "")
+    << "\nstderr: [" << r.err << "]\nstdout (first 500 chars): [" << r.out.substr(0, 500) << "]";
+  return s.str();
+}
+
+/// Exit status 2 and exactly one line "fdsid: ..." on stderr containing every
+/// one of the given substrings.
+::testing::AssertionResult IsBadInput(const RunResult& r, std::initializer_list<std::string> needles) {
+  if (r.timed_out) return ::testing::AssertionFailure() << "timed out\n" << describe(r);
+  if (r.status != 2) return ::testing::AssertionFailure() << "expected exit status 2\n" << describe(r);
+  if (r.err.empty() || r.err.back() != '\n' || std::count(r.err.begin(), r.err.end(), '\n') != 1)
+    return ::testing::AssertionFailure() << "stderr is not exactly one line\n" << describe(r);
+  if (r.err.rfind("fdsid: ", 0) != 0)
+    return ::testing::AssertionFailure() << "stderr does not start with \"fdsid: \"\n" << describe(r);
+  for (const auto& n : needles)
+    if (r.err.find(n) == std::string::npos)
+      return ::testing::AssertionFailure() << "stderr does not mention \"" << n << "\"\n" << describe(r);
+  return ::testing::AssertionSuccess();
+}
+
+::testing::AssertionResult Succeeded(const RunResult& r) {
+  if (r.timed_out || r.status != 0) return ::testing::AssertionFailure() << "expected exit status 0\n" << describe(r);
+  return ::testing::AssertionSuccess();
+}
+
+// ---------------------------------------------------------------------------
+// Input files
+
+/// A scalar AR(1) power spectrum S(w) = 1 / |1 - 0.5 e^{-iw}|^2 = 1 / (1.25 - cos w).
+std::complex<double> ar1_spectrum(double w) { return 1.0 / (1.25 - std::cos(w)); }
+
+/// Spectrum CSV rows "omega,S_re,S_im" on the uniform grid pi k / M, k = 0..M.
+std::string spectrum_csv(int M, const std::function<std::complex<double>(double)>& S) {
+  std::string text = "omega,S_re,S_im\n";
+  char line[128];
+  for (int k = 0; k <= M; ++k) {
+    const double w = M_PI * k / M;
+    const auto s = S(w);
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g\n", w, s.real(), s.imag());
+    text += line;
+  }
+  return text;
+}
+
+/// Replaces line number `lineno` (1-based, header = line 1) of text.
+std::string replace_line(const std::string& text, int lineno, const std::string& replacement) {
+  std::istringstream in(text);
+  std::string line, out;
+  for (int i = 1; std::getline(in, line); ++i) out += (i == lineno ? replacement : line) + "\n";
+  return out;
+}
+
+std::vector<std::string> files_ending_with(const fs::path& dir, const std::string& suffix) {
+  std::vector<std::string> found;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() >= suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0)
+      found.push_back(name);
+  }
+  return found;
+}
+
+/// Fixture: a fresh temporary folder per test, removed afterwards.
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    static std::atomic<int> counter{0};
+    std::random_device rd;
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("fdsid-cli-" + std::string(info->name()) + "-" + std::to_string(getpid()) +
+                                        "-" + std::to_string(counter++) + "-" + std::to_string(rd()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+
+  /// Writes text to name in the temporary folder; returns the full path.
+  std::string write(const std::string& name, const std::string& text) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p, std::ios::binary) << text;
+    return p.string();
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  /// A well-formed AR(1) spectrum file on M + 1 grid points.
+  std::string good_spectrum(int M = 64, const std::string& name = "good.csv") {
+    return write(name, spectrum_csv(M, ar1_spectrum));
+  }
+
+  /// Noise-free (epsilon = 0) or noisy samples of the paper's system by `fdsid sample-spectrum`.
+  std::string paper_samples(int M, double epsilon, int seed, const std::string& name) {
+    const std::string out = path(name);
+    std::vector<std::string> args = {"sample-spectrum", "--model", kPaperModel, "--M", std::to_string(M), "--out", out};
+    if (epsilon > 0) {
+      char eps[32];
+      std::snprintf(eps, sizeof eps, "%.17g", epsilon);
+      args.insert(args.end(), {"--epsilon", eps, "--seed", std::to_string(seed)});
+    }
+    const RunResult r = run_fdsid(args);
+    EXPECT_TRUE(Succeeded(r));
+    return out;
+  }
+
+  RunResult identify(const std::string& data, std::vector<std::string> extra = {}) {
+    std::vector<std::string> args = {"identify-spectrum", "--data", data};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run_fdsid(args);
+  }
+
+  fs::path dir_;
+};
+
+// ---------------------------------------------------------------------------
+// identify-spectrum: bad spectrum files
+
+TEST_F(Cli, SpectrumMissingFile) {
+  const std::string missing = path("no-such-file.csv");
+  EXPECT_TRUE(IsBadInput(identify(missing), {missing, "cannot open"}));
+}
+
+TEST_F(Cli, SpectrumEmptyFile) {
+  const std::string f = write("empty.csv", "");
+  EXPECT_TRUE(IsBadInput(identify(f), {f, "empty file"}));
+}
+
+TEST_F(Cli, SpectrumHeaderOnly) {
+  const std::string f = write("header-only.csv", "omega,S_re,S_im\n");
+  EXPECT_TRUE(IsBadInput(identify(f), {f, "at least 2 samples"}));
+}
+
+TEST_F(Cli, SpectrumBadHeader) {
+  const std::string text = replace_line(spectrum_csv(16, ar1_spectrum), 1, "freq,S_re,S_im");
+  const std::string f = write("bad-header.csv", text);
+  EXPECT_TRUE(IsBadInput(identify(f), {f + " line 1", "header"}));
+
+  const std::string f2 = write("bad-column.csv", replace_line(text, 1, "omega,S_im,S_re"));
+  EXPECT_TRUE(IsBadInput(identify(f2), {f2 + " line 1", "S_re"}));
+
+  const std::string f3 = write("too-few-columns.csv", replace_line(text, 1, "omega,S_re"));
+  EXPECT_TRUE(IsBadInput(identify(f3), {f3 + " line 1", "header"}));
+}
+
+TEST_F(Cli, SpectrumWrongFieldCount) {
+  const std::string base = spectrum_csv(16, ar1_spectrum);
+  const std::string few = write("few-fields.csv", replace_line(base, 5, "0.5890486225480862,1.0"));
+  EXPECT_TRUE(IsBadInput(identify(few), {few + " line 5", "2 fields", "header has 3"}));
+  const std::string many = write("many-fields.csv", replace_line(base, 7, "0.98174770424681035,1.0,0,7"));
+  EXPECT_TRUE(IsBadInput(identify(many), {many + " line 7", "4 fields"}));
+}
+
+TEST_F(Cli, SpectrumNonNumericCell) {
+  const std::string base = spectrum_csv(16, ar1_spectrum);
+  const std::string f = write("abc.csv", replace_line(base, 4, "0.39269908169872414,abc,0"));
+  EXPECT_TRUE(IsBadInput(identify(f), {f + " line 4", "S_re", "\"abc\" is not a number"}));
+  const std::string g = write("trailing.csv", replace_line(base, 3, "0.19634954084936207,1.2x,0"));
+  EXPECT_TRUE(IsBadInput(identify(g), {g + " line 3", "S_re", "not a number"}));
+  const std::string h = write("empty-cell.csv", replace_line(base, 6, "0.78539816339744828,1.0,"));
+  EXPECT_TRUE(IsBadInput(identify(h), {h + " line 6", "S_im", "empty"}));
+}
+
+TEST_F(Cli, SpectrumNanAndInfCells) {
+  const std::string base = spectrum_csv(16, ar1_spectrum);
+  const struct {
+    int line;
+    std::string row, column;
+  } cases[] = {{3, "0.19634954084936207,nan,0", "S_re"},
+               {4, "0.39269908169872414,1.0,NaN", "S_im"},
+               {5, "0.58904862254808621,inf,0", "S_re"},
+               {6, "0.78539816339744828,-Infinity,0", "S_re"},
+               {7, "0.98174770424681035,1e999,0", "S_re"},
+               {2, "nan,1.0,0", "omega"}};
+  int i = 0;
+  for (const auto& c : cases) {
+    const std::string f = write("nonfinite" + std::to_string(i++) + ".csv", replace_line(base, c.line, c.row));
+    EXPECT_TRUE(IsBadInput(identify(f), {f + " line " + std::to_string(c.line), c.column, "not finite"}));
+  }
+}
+
+TEST_F(Cli, SpectrumOffUniformGrid) {
+  const std::string base = spectrum_csv(16, ar1_spectrum);
+  // Line 5 holds k = 3: omega = 3 pi / 16 = 0.589..., moved by 1e-3.
+  const std::string f = write("off-grid.csv", replace_line(base, 5, "0.5900486225480862,1.0,0"));
+  EXPECT_TRUE(IsBadInput(identify(f), {f + " line 5", "uniform grid"}));
+
+  // A grid in Hz-like units (0 .. 0.5) is the classic mistake.
+  std::string hz = "omega,S_re,S_im\n";
+  for (int k = 0; k <= 16; ++k) hz += std::to_string(0.5 * k / 16) + ",1.0,0\n";
+  const std::string g = write("hz-grid.csv", hz);
+  EXPECT_TRUE(IsBadInput(identify(g), {g + " line 3", "uniform grid"}));
+}
+
+TEST_F(Cli, SpectrumSingleRow) {
+  const std::string f = write("one-row.csv", "omega,S_re,S_im\n0,4,0\n");
+  EXPECT_TRUE(IsBadInput(identify(f), {f, "at least 2 samples", "found 1"}));
+}
+
+TEST_F(Cli, SpectrumTooShortForPAndR) {
+  const std::string f = good_spectrum(16);
+  EXPECT_TRUE(IsBadInput(identify(f, {"--p", "40", "--r", "40"}), {"p + r", "p = 40", "r = 40", "N = 2M = 32"}));
+}
+
+TEST_F(Cli, SpectrumPNotAboveTwiceOrder) {
+  const std::string f = good_spectrum(128);
+  EXPECT_TRUE(IsBadInput(identify(f, {"--order", "4", "--p", "8"}), {"p must exceed 2n", "p = 8", "n = 4"}));
+  EXPECT_TRUE(IsBadInput(identify(f, {"--order", "4", "--p", "20", "--r", "7"}), {"r must be at least 2n"}));
+}
+
+TEST_F(Cli, SpectrumNegativePOrR) {
+  const std::string f = good_spectrum(64);
+  EXPECT_TRUE(IsBadInput(identify(f, {"--p", "-3"}), {"--p"}));
+  EXPECT_TRUE(IsBadInput(identify(f, {"--r", "-3"}), {"--r"}));
+}
+
+TEST_F(Cli, SpectrumNotPositive) {
+  // The negated AR(1) spectrum: real, negative everywhere.
+  const std::string f = write("negative.csv", spectrum_csv(64, [](double w) { return -ar1_spectrum(w); }));
+  EXPECT_TRUE(IsBadInput(identify(f), {"not positive"}));
+  EXPECT_TRUE(IsBadInput(identify(f, {"--order", "1"}), {"not positive"}));
+}
+
+// ---------------------------------------------------------------------------
+// identify-spectrum: bad options
+
+TEST_F(Cli, OrderNotAPositiveInteger) {
+  const std::string f = good_spectrum();
+  for (const std::string bad : {"0", "abc", "-2", "4x", ""})
+    EXPECT_TRUE(IsBadInput(identify(f, {"--order", bad}), {"--order", "\"" + bad + "\""})) << "order " << bad;
+}
+
+TEST_F(Cli, UnknownMethod) {
+  EXPECT_TRUE(IsBadInput(identify(good_spectrum(), {"--method", "foo"}), {"--method", "\"foo\"", "akcay2011"}));
+}
+
+TEST_F(Cli, UnknownPrecision) {
+  EXPECT_TRUE(IsBadInput(identify(good_spectrum(), {"--precision", "foo"}), {"--precision", "\"foo\""}));
+}
+
+TEST_F(Cli, UnknownExtension) {
+  EXPECT_TRUE(IsBadInput(identify(good_spectrum(), {"--extension", "foo"}), {"--extension", "\"foo\""}));
+}
+
+// ---------------------------------------------------------------------------
+// Step 6: Van Overschee et al. (1997) on noisy data (Akcay 2011, Section 4)
+
+TEST_F(Cli, Vo1997FailsAtStep6WhereAkcaySucceeds) {
+  int step6_failures = 0;
+  for (int seed = 1; seed <= 5; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const std::string data = paper_samples(1000, 1e-9, seed, "noisy" + std::to_string(seed) + ".csv");
+    const std::vector<std::string> common = {"--order", "4", "--p", "50", "--r", "50"};
+
+    std::vector<std::string> vo = common;
+    vo.insert(vo.end(), {"--method", "vo1997"});
+    const RunResult v = identify(data, vo);
+    if (v.status != 0) {
+      // Any failure must be a clean bad-input report.
+      EXPECT_TRUE(IsBadInput(v, {}));
+      const bool split = v.err.find("step 6") != std::string::npos &&
+                         (v.err.find("moduli") != std::string::npos || v.err.find("unit circle") != std::string::npos);
+      if (split) ++step6_failures;
+    }
+
+    std::vector<std::string> ak = common;
+    ak.insert(ak.end(), {"--method", "akcay2011", "--json", path("akcay" + std::to_string(seed) + ".json")});
+    const RunResult a = identify(data, ak);
+    EXPECT_TRUE(Succeeded(a));
+    EXPECT_EQ(a.err, "");
+  }
+  EXPECT_GE(step6_failures, 1) << "vo1997 never failed at step 6 on seeds 1..5";
+}
+
+// ---------------------------------------------------------------------------
+// sample-spectrum --model: bad model JSON
+
+class CliModel : public Cli {
+ protected:
+  RunResult sample(const std::string& model) {
+    return run_fdsid({"sample-spectrum", "--model", model, "--M", "8", "--out", path("out.csv")});
+  }
+  /// A valid first-order model with one field replaced by `field_json`.
+  std::string model_with(const std::string& name, const std::string& key, const std::string& field_json) {
+    json j = json::parse(R"({"domain": "discrete", "sample_time": 1.0,
+                             "A": [[0.5]], "B": [[1.0]], "C": [[1.0]], "D": [[1.0]]})");
+    if (field_json.empty()) j.erase(key);
+    else j[key] = json::parse(field_json);
+    return write(name, j.dump(2));
+  }
+};
+
+TEST_F(CliModel, ValidModelSamples) {
+  const RunResult r = sample(model_with("ok.json", "A", "[[0.5]]"));
+  EXPECT_TRUE(Succeeded(r));
+  std::ifstream f(path("out.csv"));
+  std::string header;
+  std::getline(f, header);
+  EXPECT_EQ(header, "omega,S_re,S_im");
+}
+
+TEST_F(CliModel, MissingFile) {
+  const std::string missing = path("missing.json");
+  EXPECT_TRUE(IsBadInput(sample(missing), {missing, "cannot open"}));
+}
+
+TEST_F(CliModel, MalformedJson) {
+  const std::string f = write("malformed.json", "{\"A\": [[0.5]],\n \"B\": [[1.0]\n}\n");
+  EXPECT_TRUE(IsBadInput(sample(f), {f, "malformed JSON"}));
+  const std::string g = write("truncated.json", "{\"A\": [[0.5");
+  EXPECT_TRUE(IsBadInput(sample(g), {g, "malformed JSON"}));
+  const std::string e = write("empty.json", "");
+  EXPECT_TRUE(IsBadInput(sample(e), {e, "malformed JSON"}));
+}
+
+TEST_F(CliModel, NotAnObject) {
+  const std::string f = write("array.json", "[1, 2, 3]");
+  EXPECT_TRUE(IsBadInput(sample(f), {f, "object"}));
+}
+
+TEST_F(CliModel, MissingFieldA) {
+  const std::string f = model_with("no-a.json", "A", "");
+  EXPECT_TRUE(IsBadInput(sample(f), {f, "\"A\"", "missing"}));
+}
+
+TEST_F(CliModel, NonSquareA) {
+  const std::string f = write("nonsquare.json", R"({"A": [[0.5, 0.1]], "B": [[1.0]], "C": [[1.0, 0.0]], "D": [[1.0]]})");
+  EXPECT_TRUE(IsBadInput(sample(f), {f, "A must be square", "1x2"}));
+}
+
+TEST_F(CliModel, RaggedA) {
+  const std::string f = model_with("ragged.json", "A", "[[0.5, 0.1], [0.2]]");
+  EXPECT_TRUE(IsBadInput(sample(f), {f, "field \"A\"", "row 2"}));
+}
+
+TEST_F(CliModel, StringEntryNotANumber) {
+  const std::string f = model_with("abc.json", "A", R"([["abc"]])");
+  EXPECT_TRUE(IsBadInput(sample(f), {f, "field \"A\"[0][0]", "\"abc\" is not a decimal number"}));
+  const std::string g = model_with("bool.json", "C", "[[true]]");
+  EXPECT_TRUE(IsBadInput(sample(g), {g, "field \"C\"[0][0]", "boolean"}));
+}
+
+TEST_F(CliModel, WrongDShape) {
+  const std::string f = model_with("bad-d.json", "D", "[[1.0, 2.0]]");
+  EXPECT_TRUE(IsBadInput(sample(f), {f, "D must be 1x1", "1x2"}));
+}
+
+TEST_F(CliModel, BadDomain) {
+  const std::string f = model_with("domain.json", "domain", R"("z-plane")");
+  EXPECT_TRUE(IsBadInput(sample(f), {f, "field \"domain\"", "z-plane"}));
+}
+
+TEST_F(CliModel, BadM) {
+  EXPECT_TRUE(IsBadInput(
+      run_fdsid({"sample-spectrum", "--model", kPaperModel, "--M", "0", "--out", path("out.csv")}), {"--M"}));
+}
+
+// ---------------------------------------------------------------------------
+// Success paths
+
+TEST_F(Cli, Table1JsonToStdout) {
+  const RunResult r = run_fdsid({"reproduce", "table1", "--json", "-"});
+  ASSERT_TRUE(Succeeded(r));
+  EXPECT_EQ(r.err, "");
+  json j;
+  ASSERT_NO_THROW(j = json::parse(r.out)) << "stdout is not JSON only:\n" << r.out;
+  ASSERT_TRUE(j.contains("rows"));
+  ASSERT_TRUE(j["rows"].is_array());
+  ASSERT_EQ(j["rows"].size(), 6u);
+  const int Ms[] = {16, 32, 64, 128, 256, 512};
+  for (size_t i = 0; i < 6; ++i) {
+    const json& row = j["rows"][i];
+    SCOPED_TRACE("row " + std::to_string(i));
+    ASSERT_TRUE(row.contains("M") && row.contains("sigma4") && row.contains("sigma5") && row.contains("akcay_sigmas"));
+    EXPECT_EQ(row["M"].get<int>(), Ms[i]);
+    EXPECT_TRUE(row["sigma4"].is_number());
+    EXPECT_TRUE(row["sigma5"].is_number());
+    EXPECT_GT(row["sigma4"].get<double>(), row["sigma5"].get<double>());
+    ASSERT_TRUE(row["akcay_sigmas"].is_array());
+    EXPECT_GE(row["akcay_sigmas"].size(), 8u);
+  }
+}
+
+/// Eigenvalues of the paper's A: two 2x2 blocks, each a complex pair.
+std::vector<std::complex<double>> paper_poles() {
+  std::vector<std::complex<double>> z;
+  const double blocks[2][4] = {{0.8876, 0.4494, -0.4494, 0.7978}, {-0.6129, 0.0645, -6.4516, -0.7419}};
+  for (const auto& b : blocks) {
+    const double half_trace = (b[0] + b[3]) / 2, det = b[0] * b[3] - b[1] * b[2];
+    const std::complex<double> root = std::sqrt(std::complex<double>(half_trace * half_trace - det));
+    z.push_back(half_trace + root);
+    z.push_back(half_trace - root);
+  }
+  return z;
+}
+
+TEST_F(Cli, IdentifyPaperSpectrumWritesModelJson) {
+  const std::string data = paper_samples(128, 0, 0, "paper128.csv");
+  const std::string out = path("model.json");
+  const RunResult r = identify(data, {"--json", out});
+  ASSERT_TRUE(Succeeded(r));
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find("identified order 4"), std::string::npos) << r.out;
+
+  std::ifstream f(out);
+  ASSERT_TRUE(f) << "no JSON written to " << out;
+  json j;
+  ASSERT_NO_THROW(j = json::parse(f));
+  EXPECT_EQ(j.at("order").get<int>(), 4);
+  EXPECT_EQ(j.at("method").get<std::string>(), "akcay2011");
+  ASSERT_TRUE(j.at("singular_values").is_array());
+  EXPECT_GE(j["singular_values"].size(), 8u);
+  for (const char* key : {"A", "B", "C", "D"}) EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["A"].size(), 4u);
+  EXPECT_EQ(j.at("domain").get<std::string>(), "discrete");
+
+  ASSERT_TRUE(j.at("poles").is_array());
+  ASSERT_EQ(j["poles"].size(), 4u);
+  // Noise-free data: the poles are the system's, to many digits.
+  for (const auto& pz : j["poles"]) {
+    ASSERT_TRUE(pz.is_array() && pz.size() == 2) << pz.dump();
+    const std::complex<double> z(pz[0].get<double>(), pz[1].get<double>());
+    double nearest = 1e300;
+    for (const auto& t : paper_poles()) nearest = std::min(nearest, std::abs(z - t));
+    EXPECT_LT(nearest, 1e-6) << "pole " << pz.dump();
+  }
+
+  // The identified model is itself a model file that sample-spectrum accepts.
+  EXPECT_TRUE(Succeeded(run_fdsid({"sample-spectrum", "--model", out, "--M", "16", "--out", path("resampled.csv")})));
+}
+
+TEST_F(Cli, IdentifyJsonToStdoutIsJsonOnly) {
+  const RunResult r = identify(good_spectrum(64), {"--json", "-", "--order", "1"});
+  ASSERT_TRUE(Succeeded(r));
+  json j;
+  ASSERT_NO_THROW(j = json::parse(r.out)) << r.out;
+  EXPECT_EQ(j.at("order").get<int>(), 1);
+  ASSERT_EQ(j.at("poles").size(), 1u);
+  EXPECT_NEAR(j["poles"][0][0].get<double>(), 0.5, 1e-8);
+  EXPECT_NEAR(j["poles"][0][1].get<double>(), 0.0, 1e-8);
+}
+
+TEST_F(Cli, JsonToFileLeavesNoTemporary) {
+  const std::string data = good_spectrum(64);
+  const std::string out = path("result.json");
+  ASSERT_TRUE(Succeeded(identify(data, {"--json", out})));
+  EXPECT_TRUE(fs::exists(out));
+  // Overwriting an existing file goes through the temporary too.
+  ASSERT_TRUE(Succeeded(identify(data, {"--json", out})));
+  ASSERT_TRUE(Succeeded(run_fdsid({"reproduce", "table1", "--json", path("table1.json")})));
+  EXPECT_TRUE(fs::exists(path("table1.json")));
+  EXPECT_TRUE(files_ending_with(dir_, ".tmp-fdsid").empty());
+}
+
+TEST_F(Cli, JsonToUnwritablePath) {
+  const std::string out = path("no-such-dir/result.json");
+  EXPECT_TRUE(IsBadInput(identify(good_spectrum(64), {"--json", out}), {out, "cannot write"}));
+  EXPECT_TRUE(files_ending_with(dir_, ".tmp-fdsid").empty());
+}
+
+// ---------------------------------------------------------------------------
+// Argument parsing (CLI11)
+
+TEST_F(Cli, UnknownSubcommand) { EXPECT_TRUE(IsBadInput(run_fdsid({"frobnicate"}), {})); }
+
+TEST_F(Cli, NoSubcommand) { EXPECT_TRUE(IsBadInput(run_fdsid({}), {})); }
+
+TEST_F(Cli, UnknownReproduceTarget) { EXPECT_TRUE(IsBadInput(run_fdsid({"reproduce", "table9"}), {})); }
+
+TEST_F(Cli, MissingRequiredOption) {
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-spectrum"}), {"--data"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"sample-spectrum", "--model", kPaperModel}), {"--M"}));
+}
+
+TEST_F(Cli, UnknownOption) {
+  EXPECT_TRUE(IsBadInput(identify(good_spectrum(), {"--frobnicate", "1"}), {"--frobnicate"}));
+}
+
+TEST_F(Cli, NonIntegerP) { EXPECT_TRUE(IsBadInput(identify(good_spectrum(), {"--p", "abc"}), {"--p"})); }
+
+TEST_F(Cli, HelpExitsZero) {
+  const RunResult r = run_fdsid({"--help"});
+  EXPECT_TRUE(Succeeded(r));
+  EXPECT_NE(r.out.find("identify-spectrum"), std::string::npos);
+}
+
+// ---------------------------------------------------------------------------
+// Known CLI defects, disabled until fixed (run with --gtest_also_run_disabled_tests).
+
+// `sample-spectrum --epsilon inf` exits 0 and writes -inf/nan samples; nan and
+// negative levels are silently taken as "no noise".
+TEST_F(Cli, SampleEpsilonMustBeFiniteAndNonNegative) {
+  for (const std::string eps : {"inf", "nan", "-1"}) {
+    const RunResult r =
+        run_fdsid({"sample-spectrum", "--model", kPaperModel, "--M", "8", "--epsilon", eps, "--out", path("e.csv")});
+    EXPECT_TRUE(IsBadInput(r, {"--epsilon"})) << "epsilon " << eps;
+  }
+}
+
+// `sample-spectrum --M 2147483647`: M + 1 overflows int (UBSan: fast/src/model.cpp:92
+// "signed integer overflow"); the release build reports "internal error: std::bad_alloc"
+// without naming --M.
+TEST_F(Cli, SampleHugeM) {
+  const RunResult r =
+      run_fdsid({"sample-spectrum", "--model", kPaperModel, "--M", "2147483647", "--out", path("big.csv")});
+  EXPECT_TRUE(IsBadInput(r, {"--M"}));
+}
+
+// A pole on the unit circle (A = [[1]]) makes S infinite at omega = 0:
+// sample-spectrum exits 0 and writes "0,nan,nan".
+TEST_F(CliModel, SamplePoleOnUnitCircle) {
+  EXPECT_TRUE(IsBadInput(sample(model_with("integrator.json", "A", "[[1.0]]")), {}));
+}
+
+// A directory as --model: "internal error: basic_filebuf::underflow error
+// reading the file: Is a directory", without the path.
+TEST_F(CliModel, ModelPathIsDirectory) {
+  EXPECT_TRUE(IsBadInput(sample(dir_.string()), {dir_.string()}));
+}
+
+// `fdsid frobnicate` says "A subcommand is required" without naming frobnicate.
+TEST_F(Cli, UnknownSubcommandIsNamed) {
+  EXPECT_TRUE(IsBadInput(run_fdsid({"frobnicate"}), {"frobnicate"}));
+}
+
+// `--json ''` exits 0 and writes nothing.
+TEST_F(Cli, EmptyJsonPath) {
+  EXPECT_TRUE(IsBadInput(identify(good_spectrum(), {"--json", ""}), {"--json"}));
+}
+
+// A constant negative (or zero) spectrum is reported as "step 4: too few
+// singular values to read an order from" instead of "not positive".
+TEST_F(Cli, ConstantNegativeSpectrumNotPositive) {
+  const std::string f = write("neg-const.csv", spectrum_csv(16, [](double) { return std::complex<double>(-1.0); }));
+  EXPECT_TRUE(IsBadInput(identify(f), {f, "not positive"}));
+}
+
+}  // namespace

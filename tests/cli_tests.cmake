@@ -1,0 +1,13 @@
+# Command-line tests of the fdsid executable: they run build/fdsid as a child
+# process and check its exit status, stdout and stderr (contracts: exit 2 on bad
+# input with one line on stderr naming the file, line/field and what is wrong).
+# Included from tests/CMakeLists.txt.
+add_executable(cli_test ${CMAKE_CURRENT_LIST_DIR}/cli_test.cpp)
+target_link_libraries(cli_test PRIVATE GTest::gtest_main nlohmann_json::nlohmann_json)
+target_compile_definitions(cli_test PRIVATE
+  FDSID_EXE="$<TARGET_FILE:fdsid>"
+  FDSID_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+# The tests execute fdsid, so it must be built first.
+add_dependencies(cli_test fdsid)
+
+fdsid_discover_tests(cli_test LABELS cli unit quick WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
