@@ -39,4 +39,14 @@ inline double eigenvalue_condition(const Eigen::MatrixXd& A) {
   return k;
 }
 
+/// κ(V) = ||V|| ||V^{-1}|| of the eigenvector matrix of A (columns normalised):
+/// ||A^k||_2 <= κ(V) ρ(A)^k for diagonalisable A.
+inline double eigenvalue_condition_number_of_basis(const Eigen::MatrixXd& A) {
+  Eigen::EigenSolver<Eigen::MatrixXd> es(A);
+  Eigen::MatrixXcd V = es.eigenvectors();
+  for (Eigen::Index i = 0; i < V.cols(); ++i) V.col(i).normalize();
+  const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXcd>(V).singularValues();
+  return s(0) / s(s.size() - 1);
+}
+
 }  // namespace fdsid::testing

@@ -98,4 +98,27 @@ Eigen::MatrixXcd sample_spectrum(const StateSpace& m, int M) {
   return out;
 }
 
+Eigen::MatrixXd observability(const Eigen::MatrixXd& A, const Eigen::MatrixXd& C, int r) {
+  const auto p = C.rows();
+  Eigen::MatrixXd O(p * r, A.rows());
+  Eigen::MatrixXd block = C;
+  for (int k = 0; k < r; ++k) {
+    O.middleRows(k * p, p) = block;
+    block = (block * A).eval();
+  }
+  return O;
+}
+
+StateSpace refer_realization(const StateSpace& est, const StateSpace& ref, int r) {
+  if (est.order() != ref.order() || est.outputs() != ref.outputs())
+    throw Error(ErrorKind::Dimension, "Eq. (14)", "estimate and reference differ in order or outputs");
+  const Eigen::MatrixXd T = observability(est.A, est.C, r).householderQr().solve(observability(ref.A, ref.C, r));
+  const Eigen::PartialPivLU<Eigen::MatrixXd> Tlu(T);
+  StateSpace out = est;
+  out.A = Tlu.solve(est.A * T);
+  out.B = Tlu.solve(est.B);
+  out.C = est.C * T;
+  return out;
+}
+
 }  // namespace fdsid

@@ -294,6 +294,11 @@ Eigen::MatrixXd van_overschee_matrix(const Eigen::MatrixXd& shat, int m, int p, 
   return hankel(shat, m, p, r, 0);
 }
 
+Eigen::MatrixXd shift_matrix(const Eigen::MatrixXd& U2n, int m) {
+  const auto rows = U2n.rows() - m;  // (p - 1) m: J_d drops the last block row, J_u the first
+  return U2n.topRows(rows).householderQr().solve(U2n.bottomRows(rows));
+}
+
 int order_from_singular_values(const Eigen::VectorXd& sv, int n_max, int& gap_index, double& gap_ratio) {
   int best = 0;
   gap_ratio = 0.0;
@@ -376,9 +381,8 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
   res.order = n;
   const Eigen::MatrixXd U = svd.matrixU().leftCols(2 * n);
 
-  // Step 5: Ã = (J_d U)^† J_u U -- the shift equations, solved by Householder QR.
-  const int rows = (p - 1) * m;
-  const Eigen::MatrixXd Atilde = U.topRows(rows).householderQr().solve(U.bottomRows(rows));
+  // Step 5: Ã from the shift equations.
+  const Eigen::MatrixXd Atilde = shift_matrix(U, m);
   if (!Atilde.allFinite()) throw Error(ErrorKind::Numerical, "step 5", "shift equations gave a non-finite A");
 
   // Step 6: eigen-decomposition of Ã and the split |λ| < 1 (causal) / > 1.

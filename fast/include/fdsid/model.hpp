@@ -62,4 +62,13 @@ Eigen::MatrixXcd summand_spectrum(const SpectralSummands& s, cplx z);
 /// Returns (m*m) x (M+1): column k holds vec(S_k) (column-major m x m).
 Eigen::MatrixXcd sample_spectrum(const StateSpace& model, int M);
 
+/// Extended observability matrix O_r = [C; CA; ...; CA^{r-1}] (Pintelon 2002 Eq. 7).
+Eigen::MatrixXd observability(const Eigen::MatrixXd& A, const Eigen::MatrixXd& C, int r);
+
+/// Pintelon (2002) Eq. (14): the estimate (Â, B̂, Ĉ) referred to the realisation
+/// (A, C) of `reference`: Â_T = T^{-1} Â T, B̂_T = T^{-1} B̂, Ĉ_T = Ĉ T with
+/// T = Ô_r^+ O_r (least squares by Householder QR). Invariant under any
+/// similarity applied to the estimate; D is unchanged.
+StateSpace refer_realization(const StateSpace& estimate, const StateSpace& reference, int r);
+
 }  // namespace fdsid

@@ -68,6 +68,11 @@ Eigen::MatrixXd akcay_matrix(const Eigen::MatrixXd& shat, int m, int p, int r);
 /// term of Eq. (19) alone.
 Eigen::MatrixXd van_overschee_matrix(const Eigen::MatrixXd& shat, int m, int p, int r);
 
+/// Algorithm 1 step 5: Ã = (J_d U_{2n})^† J_u U_{2n}, the shift equations of the
+/// observability range U_{2n} (pm x 2n) with block size m, by Householder QR.
+/// For any orthogonal Q, shift_matrix(U Q) = Q^T shift_matrix(U) Q.
+Eigen::MatrixXd shift_matrix(const Eigen::MatrixXd& U2n, int m);
+
 /// Everything Algorithm 1 produced.
 struct SpectrumResult {
   StateSpace model;             ///< (Â, B̂, Ĉ, D̂): the minimum-phase spectral factor
