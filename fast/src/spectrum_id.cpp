@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -32,6 +33,28 @@ std::mutex& fftw_planner_mutex() {
   return m;
 }
 
+struct FftwFree;
+
+// A c2r plan for `howmany` interleaved transforms of length N, made once per
+// (N, howmany) under the planner lock and kept for the life of the process.
+fftw_plan c2r_plan(int N, int howmany) {
+  static std::map<std::pair<int, int>, fftw_plan> cache;
+  std::lock_guard<std::mutex> lock(fftw_planner_mutex());
+  auto it = cache.find({N, howmany});
+  if (it != cache.end()) return it->second;
+  const size_t M1 = static_cast<size_t>(N / 2 + 1) * howmany;
+  fftw_complex* in = fftw_alloc_complex(M1);
+  double* out = fftw_alloc_real(static_cast<size_t>(N) * howmany);
+  fftw_plan plan = in && out ? fftw_plan_many_dft_c2r(1, &N, howmany, in, nullptr, howmany, 1, out, nullptr, howmany, 1,
+                                                      FFTW_ESTIMATE)
+                             : nullptr;
+  fftw_free(in);
+  fftw_free(out);
+  if (!plan) throw Error(ErrorKind::Numerical, "step 2", "FFTW could not plan a transform of length " + std::to_string(N));
+  cache.emplace(std::make_pair(N, howmany), plan);
+  return plan;
+}
+
 struct FftwFree {
   void operator()(void* p) const { fftw_free(p); }
 };
@@ -44,20 +67,29 @@ struct Block {
   double a, b;
 };
 
+// 1/w without the overflow-guarded library division: |w| is bounded away from 0
+// and infinity here (|z| = 1, |λ| < 1), so conj(w)/|w|^2 is accurate to a few u.
+inline cplx reciprocal(cplx w) {
+  const double d = w.real() * w.real() + w.imag() * w.imag();
+  return cplx(w.real() / d, -w.imag() / d);
+}
+
 // χ(z) = Ĉ (zI - Â)^{-1} for block-diagonal Â, written into chi (m x n).
 // 2x2 block: (zI - [[a,b],[-b,a]])^{-1} = [[z-a, b], [-b, z-a]] / ((z-a)^2 + b^2).
 void resolvent_row(const Eigen::MatrixXd& C, const std::vector<Block>& blocks, cplx z, Eigen::MatrixXcd& chi) {
   for (const Block& bl : blocks) {
     if (bl.size == 1) {
-      chi.col(bl.start) = C.col(bl.start).cast<cplx>() / (z - bl.a);
+      const cplx r = reciprocal(z - bl.a);
+      for (Eigen::Index i = 0; i < C.rows(); ++i) chi(i, bl.start) = C(i, bl.start) * r;
     } else {
       const cplx za = z - bl.a;
-      const cplx det = za * za + bl.b * bl.b;
-      const cplx r11 = za / det, r12 = bl.b / det;
-      const auto c0 = C.col(bl.start).cast<cplx>();
-      const auto c1 = C.col(bl.start + 1).cast<cplx>();
-      chi.col(bl.start) = c0 * r11 - c1 * r12;
-      chi.col(bl.start + 1) = c0 * r12 + c1 * r11;
+      const cplx inv = reciprocal(za * za + bl.b * bl.b);
+      const cplx r11 = za * inv, r12 = bl.b * inv;
+      for (Eigen::Index i = 0; i < C.rows(); ++i) {
+        const double c0 = C(i, bl.start), c1 = C(i, bl.start + 1);
+        chi(i, bl.start) = c0 * r11 - c1 * r12;
+        chi(i, bl.start + 1) = c0 * r12 + c1 * r11;
+      }
     }
   }
 }
@@ -79,6 +111,11 @@ class SummandDesign {
   // Writes the rows of sample z into D (rows_per_sample() x unknowns()) and, when
   // data != nullptr, the matching right-hand side into y.
   void rows(cplx z, const SpectrumData* data, int k, Eigen::Ref<Eigen::MatrixXd> D, Eigen::Ref<Eigen::VectorXd> y) {
+    if (m_ == 1) {
+      scalar_row(z, D.data(), D.outerStride());
+      if (data) y(0) = data->S(0, k).real();
+      return;
+    }
     resolvent_row(C_, blocks_, z, chi_);
     D.setZero();
     const double w = std::sqrt(2.0);
@@ -111,6 +148,29 @@ class SummandDesign {
     }
   }
 
+  // m = 1: the single row [2 Re χ(z), 1] into row[0], row[stride], ..., with only
+  // the real parts computed (same formulas as resolvent_row).
+  void scalar_row(cplx z, double* row, Eigen::Index stride) const {
+    // In real arithmetic (std::complex products go through NaN-checking library
+    // calls): with x + iy = z - a, a 2x2 block has det = u + iv, u = x^2 - y^2 + b^2,
+    // v = 2xy, and Re((z-a)/det) = (xu + yv)/|det|^2, Re(b/det) = b u/|det|^2.
+    const double zr = z.real(), zi = z.imag();
+    for (const Block& bl : blocks_) {
+      const double x = zr - bl.a, y = zi;
+      if (bl.size == 1) {
+        row[bl.start * stride] = 2.0 * C_(0, bl.start) * x / (x * x + y * y);
+      } else {
+        const double u = x * x - y * y + bl.b * bl.b, v = 2.0 * x * y;
+        const double id = 1.0 / (u * u + v * v);
+        const double r11 = (x * u + y * v) * id, r12 = bl.b * u * id;
+        const double c0 = C_(0, bl.start), c1 = C_(0, bl.start + 1);
+        row[bl.start * stride] = 2.0 * (c0 * r11 - c1 * r12);
+        row[(bl.start + 1) * stride] = 2.0 * (c0 * r12 + c1 * r11);
+      }
+    }
+    row[n_ * stride] = 1.0;
+  }
+
   int e_position(int a, int b) const {  // a <= b, row-wise upper triangle
     return a * m_ - a * (a - 1) / 2 + (b - a);
   }
@@ -122,7 +182,24 @@ class SummandDesign {
   Eigen::MatrixXcd chi_;
 };
 
-cplx grid_point(int k, int M) { return std::polar(1.0, M_PI * k / M); }
+// The grid points z_k = e^{iπk/M}, k = k0, k0+1, ...: a rotation recurrence
+// re-anchored on std::polar every 64 steps, so the error stays below ~64u while
+// sin/cos are called once per 64 samples.
+class GridWalker {
+ public:
+  GridWalker(int k0, int M) : k_(k0), M_(M), step_(std::polar(1.0, M_PI / M)) { anchor(); }
+  cplx z() const { return z_; }
+  void next() {
+    ++k_;
+    if (k_ % 64 == 0) anchor();
+    else z_ *= step_;
+  }
+
+ private:
+  void anchor() { z_ = std::polar(1.0, M_PI * k_ / M_); }
+  int k_, M_;
+  cplx step_, z_;
+};
 
 // Hermitian spectrum value from the summand coefficients θ at row block D.
 Eigen::MatrixXcd unpack_hermitian(const Eigen::VectorXd& values, int m) {
@@ -242,56 +319,81 @@ void check_pr(int N, int n, int p, int r) {
   if (static_cast<long long>(p) + r > N) fail("data too short: p + r exceeds N");
 }
 
-Eigen::MatrixXd fourier_coefficients(const SpectrumData& data, Extension ext) {
+namespace {
+
+// Buffers of the transforms, kept per thread and grown on demand: a second
+// identification of the same size then touches no fresh pages (at M = 10^6 the
+// page faults of two new 16 MB arrays cost about half an FFT).
+struct FftWorkspace {
+  std::unique_ptr<fftw_complex, FftwFree> in;
+  std::unique_ptr<double, FftwFree> out;
+  size_t in_size = 0, out_size = 0;
+};
+
+// Steps 1-2 without the 1/N factor: returns the (m*m) x N column-major array
+// N ŝ_k (valid until the next call on this thread).
+const double* unscaled_fourier_coefficients(const SpectrumData& data, Extension ext) {
   const int m = data.m, M = data.M, N = 2 * M, mm = m * m;
   if (M < 1) throw Error(ErrorKind::Dimension, "step 1", "need at least 2 spectrum samples (M >= 1)");
+  thread_local FftWorkspace ws;
+  const size_t in_size = static_cast<size_t>(mm) * (M + 1), out_size = static_cast<size_t>(mm) * N;
+  if (ws.in_size < in_size) {
+    ws.in.reset(fftw_alloc_complex(in_size));
+    ws.in_size = ws.in ? in_size : 0;
+  }
+  if (ws.out_size < out_size) {
+    ws.out.reset(fftw_alloc_real(out_size));
+    ws.out_size = ws.out ? out_size : 0;
+  }
+  if (!ws.in || !ws.out)
+    throw Error(ErrorKind::Numerical, "step 1", "out of memory for the FFT of length " + std::to_string(N));
   // Input of the complex-to-real transforms: M+1 Hermitian-extended samples per entry.
-  std::unique_ptr<fftw_complex, FftwFree> in(fftw_alloc_complex(static_cast<size_t>(mm) * (M + 1)));
-  std::unique_ptr<double, FftwFree> out(fftw_alloc_real(static_cast<size_t>(mm) * N));
-  if (!in || !out) throw Error(ErrorKind::Numerical, "step 1", "out of memory for the FFT of length " + std::to_string(N));
   for (int k = 0; k <= M; ++k)
     for (int b = 0; b < m; ++b)
       for (int a = 0; a < m; ++a) {
         const cplx v = ext == Extension::HermitianPart ? 0.5 * (data.at(a, b, k) + std::conj(data.at(b, a, k)))
                                                        : data.at(a, b, k);
-        fftw_complex& dst = in.get()[static_cast<size_t>(k) * mm + a + m * b];
+        fftw_complex& dst = ws.in.get()[static_cast<size_t>(k) * mm + a + m * b];
         dst[0] = v.real();
         dst[1] = v.imag();
       }
-  fftw_plan plan;
-  {
-    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
-    // Eq. (20): ŝ_k = (1/N) sum_j e^{+i 2π jk/N} S_j is FFTW's unnormalised backward
-    // transform; c2r reads samples 0..M and supplies S_{N-j} = conj(S_j).
-    plan = fftw_plan_many_dft_c2r(1, &N, mm, in.get(), nullptr, mm, 1, out.get(), nullptr, mm, 1, FFTW_ESTIMATE);
-  }
-  fftw_execute(plan);
-  {
-    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
-    fftw_destroy_plan(plan);
-  }
-  Eigen::MatrixXd shat = Eigen::Map<Eigen::MatrixXd>(out.get(), mm, N) / static_cast<double>(N);
-  return shat;
+  // Eq. (20): ŝ_k = (1/N) sum_j e^{+i 2π jk/N} S_j is FFTW's unnormalised backward
+  // transform; c2r reads samples 0..M and supplies S_{N-j} = conj(S_j).
+  // Plans are cached per (N, m^2) and executed on these (fftw_alloc-aligned)
+  // arrays with the new-array interface, which is thread-safe.
+  fftw_execute_dft_c2r(c2r_plan(N, mm), ws.in.get(), ws.out.get());
+  return ws.out.get();
 }
 
-namespace {
-Eigen::MatrixXd hankel(const Eigen::MatrixXd& shat, int m, int p, int r, int offset) {
-  // Block (k, l), 1-based, is ŝ_{offset + k + l - 1}.
+// Block (k, l), 1-based, is ŝ_{offset + k + l - 1}; shat is (m*m) x N column-major.
+Eigen::MatrixXd hankel(const double* shat, int m, int p, int r, int offset) {
   Eigen::MatrixXd H(p * m, r * m);
+  const auto mm = static_cast<size_t>(m) * m;
   for (int l = 0; l < r; ++l)
     for (int k = 0; k < p; ++k)
-      H.block(k * m, l * m, m, m) = Eigen::Map<const Eigen::MatrixXd>(shat.col(offset + k + l + 1).data(), m, m);
+      H.block(k * m, l * m, m, m) = Eigen::Map<const Eigen::MatrixXd>(shat + mm * (offset + k + l + 1), m, m);
   return H;
 }
-}  // namespace
 
-Eigen::MatrixXd akcay_matrix(const Eigen::MatrixXd& shat, int m, int p, int r) {
-  const int N = static_cast<int>(shat.cols());
+// Eq. (19) and Eq. (13) on a raw coefficient array of N columns.
+Eigen::MatrixXd akcay_matrix(const double* shat, int N, int m, int p, int r) {
   return hankel(shat, m, p, r, 0) + hankel(shat, m, p, r, N - p - r);
 }
 
+}  // namespace
+
+Eigen::MatrixXd fourier_coefficients(const SpectrumData& data, Extension ext) {
+  const int N = 2 * data.M;
+  return Eigen::Map<const Eigen::MatrixXd>(unscaled_fourier_coefficients(data, ext), data.m * data.m, N) /
+         static_cast<double>(N);
+}
+
+Eigen::MatrixXd akcay_matrix(const Eigen::MatrixXd& shat, int m, int p, int r) {
+  return akcay_matrix(shat.data(), static_cast<int>(shat.cols()), m, p, r);
+}
+
 Eigen::MatrixXd van_overschee_matrix(const Eigen::MatrixXd& shat, int m, int p, int r) {
-  return hankel(shat, m, p, r, 0);
+  return hankel(shat.data(), m, p, r, 0);
 }
 
 Eigen::MatrixXd shift_matrix(const Eigen::MatrixXd& U2n, int m) {
@@ -341,12 +443,12 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
   res.r = r;
 
   // Steps 1-2: extension and inverse DFT (Eq. 20).
-  const Eigen::MatrixXd shat = fourier_coefficients(data, opt.extension);
+  const double* shat_N = unscaled_fourier_coefficients(data, opt.extension);  // N ŝ_k
   // ŝ_0 is the zero-lag covariance R_0 = E + aliasing (Eq. 20 at k = 0): a power
   // spectrum has a positive definite one. Individual noisy samples may dip below
   // zero where S is small (Section 4's data do), so this is the check on the data.
   {
-    const Eigen::Map<const Eigen::MatrixXd> s0(shat.col(0).data(), m, m);
+    const Eigen::Map<const Eigen::MatrixXd> s0(shat_N, m, m);
     const Eigen::MatrixXd h = 0.5 * (s0 + s0.transpose());
     const double l0 = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(h, Eigen::EigenvaluesOnly).eigenvalues()(0);
     if (!(l0 > 0.0))
@@ -355,8 +457,9 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
                   "definite (smallest eigenvalue " + fmt(l0, 4) + ")");
   }
   // Step 3: SVD of 𝒴 (Eq. 19) or of Ĝ_p F_r (Eq. 13).
-  const Eigen::MatrixXd Y =
-      opt.method == Method::Akcay2011 ? akcay_matrix(shat, m, p, r) : van_overschee_matrix(shat, m, p, r);
+  const Eigen::MatrixXd Y = (opt.method == Method::Akcay2011 ? akcay_matrix(shat_N, N, m, p, r)
+                                                             : hankel(shat_N, m, p, r, 0)) /
+                            static_cast<double>(N);
   // One-sided Jacobi (with QR preconditioning), not BDCSVD: Eigen 3.4.0's
   // divide-and-conquer returned σ_{2n} wrong in the 4th digit on a 100 x 100 𝒴
   // with pairs of equal singular values (a symmetric MIMO case found by the
@@ -453,25 +556,29 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
   // Step 8: Ê, F̂ by least squares over all M+1 samples (chunked Householder QR).
   SummandDesign design(Chat, blocks, m);
   const int q = design.unknowns(), rps = design.rows_per_sample();
-  const int chunk = std::max(1, 512 / rps);
-  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(0, q + 1);
-  Eigen::MatrixXd work;
+  // TSQR: R of [R; next chunk of rows] by one Householder QR per chunk, in a
+  // fixed work matrix (unused rows of a last, partial chunk are zero and leave R
+  // unchanged).
+  if (static_cast<long long>(M + 1) * rps < q)
+    throw Error(ErrorKind::Dimension, "step 8", "fewer equations than unknowns in the E, F fit");
+  const int chunk = std::max(1, 1024 / rps);
+  const int top = q + 1;
+  Eigen::MatrixXd work = Eigen::MatrixXd::Zero(top + chunk * rps, q + 1);
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(work.rows(), work.cols());
+  Eigen::VectorXd y(rps);
   for (int k0 = 0; k0 <= M; k0 += chunk) {
     const int kn = std::min(chunk, M + 1 - k0);
-    work.resize(R.rows() + kn * rps, q + 1);
-    work.topRows(R.rows()) = R;
-    for (int j = 0; j < kn; ++j) {
-      const int k = k0 + j;
-      auto blk = work.block(R.rows() + j * rps, 0, rps, q + 1);
-      Eigen::VectorXd y(rps);
-      design.rows(grid_point(k, M), &data, k, blk.leftCols(q), y);
+    if (kn < chunk) work.bottomRows((chunk - kn) * rps).setZero();
+    GridWalker grid(k0, M);
+    for (int j = 0; j < kn; ++j, grid.next()) {
+      auto blk = work.block(top + j * rps, 0, rps, q + 1);
+      design.rows(grid.z(), &data, k0 + j, blk.leftCols(q), y);
       blk.col(q) = y;
     }
-    Eigen::HouseholderQR<Eigen::MatrixXd> qr(work);
-    const int keep = std::min<int>(static_cast<int>(work.rows()), q + 1);
-    R = qr.matrixQR().topRows(keep).triangularView<Eigen::Upper>();
+    qr.compute(work);
+    work.topRows(top) = qr.matrixQR().topRows(top).triangularView<Eigen::Upper>();
   }
-  if (R.rows() < q) throw Error(ErrorKind::Dimension, "step 8", "fewer equations than unknowns in the E, F fit");
+  const Eigen::MatrixXd R = work.topRows(top);
   const Eigen::MatrixXd Rq = R.topLeftCorner(q, q);
   const double rmax = Rq.diagonal().cwiseAbs().maxCoeff(), rmin = Rq.diagonal().cwiseAbs().minCoeff();
   if (!(rmin > 1e3 * kUnitRoundoff * rmax))
@@ -490,12 +597,20 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
   // Ŝ must be positive on the grid, or no spectral factor exists.
   {
     Eigen::MatrixXd D(rps, q);
-    Eigen::VectorXd dummy(rps);
+    Eigen::VectorXd values(rps);
     double worst = std::numeric_limits<double>::infinity();
     int worst_k = 0;
-    for (int k = 0; k <= M; ++k) {
-      design.rows(grid_point(k, M), nullptr, k, D, dummy);
-      const double v = min_hermitian_eigenvalue(unpack_hermitian(D * theta, m));
+    GridWalker grid(0, M);
+    for (int k = 0; k <= M; ++k, grid.next()) {
+      double v;
+      if (m == 1) {  // Ŝ(z_k) = row · θ, without the general path's temporaries
+        design.scalar_row(grid.z(), D.data(), 1);
+        v = D.row(0).dot(theta);
+      } else {
+        design.rows(grid.z(), nullptr, k, D, values);
+        values.noalias() = D * theta;
+        v = min_hermitian_eigenvalue(unpack_hermitian(values, m));
+      }
       if (v < worst) {
         worst = v;
         worst_k = k;
