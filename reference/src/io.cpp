@@ -1,0 +1,328 @@
+// Model JSON and power-spectrum CSV (shared/CONTRACTS.md) in high precision.
+// No Eigen decomposition is instantiated here (see spectrum_id.cpp).
+#include "fdsid/reference/io.hpp"
+
+#include <boost/math/constants/constants.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cstdint>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+namespace fdsid::reference {
+namespace {
+
+using nlohmann::json;
+
+std::string trim(const std::string& text) {
+  std::size_t begin = 0, end = text.size();
+  while (begin < end && std::isspace(static_cast<unsigned char>(text[begin]))) ++begin;
+  while (end > begin && std::isspace(static_cast<unsigned char>(text[end - 1]))) --end;
+  return text.substr(begin, end - begin);
+}
+
+// [+-]? (digits [. digits?] | . digits) ([eE] [+-]? digits)?
+bool is_decimal(const std::string& text) {
+  std::size_t i = 0;
+  const std::size_t n = text.size();
+  auto digits = [&]() {
+    const std::size_t start = i;
+    while (i < n && std::isdigit(static_cast<unsigned char>(text[i]))) ++i;
+    return i - start;
+  };
+  if (i < n && (text[i] == '+' || text[i] == '-')) ++i;
+  std::size_t mantissa = digits();
+  if (i < n && text[i] == '.') {
+    ++i;
+    mantissa += digits();
+  }
+  if (mantissa == 0) return false;
+  if (i < n && (text[i] == 'e' || text[i] == 'E')) {
+    ++i;
+    if (i < n && (text[i] == '+' || text[i] == '-')) ++i;
+    if (digits() == 0) return false;
+  }
+  return i == n;
+}
+
+// The shortest decimal that reads back as x (glibc printf is correctly
+// rounded). For a number written with ≤ 15 significant digits this is exactly
+// the text that was written: two distinct such decimals never share a double.
+std::string shortest_decimal(double x) {
+  char buffer[64];
+  for (int digits = 1; digits <= 17; ++digits) {
+    std::snprintf(buffer, sizeof buffer, "%.*e", digits - 1, x);
+    if (std::strtod(buffer, nullptr) == x) break;
+  }
+  return buffer;
+}
+
+Real json_to_real(const json& value, const std::string& where) {
+  if (value.is_string()) {
+    try {
+      return parse_decimal(value.get<std::string>());
+    } catch (const InputError& e) {
+      throw InputError(where + ": " + e.what());
+    }
+  }
+  if (value.is_number_integer()) {
+    if (value.is_number_unsigned()) return Real(value.get<std::uint64_t>());
+    return Real(value.get<std::int64_t>());
+  }
+  if (value.is_number_float()) {
+    const double x = value.get<double>();
+    if (!std::isfinite(x)) throw InputError(where + ": not a finite number");
+    return parse_decimal(shortest_decimal(x));
+  }
+  throw InputError(where + ": expected a number or a decimal string, got " + value.dump());
+}
+
+MatrixR matrix_field(const json& model, const std::string& name) {
+  if (!model.contains(name)) throw InputError("model: missing field \"" + name + "\"");
+  const json& rows = model.at(name);
+  if (!rows.is_array() || rows.empty())
+    throw InputError("model: field \"" + name + "\" must be a non-empty array of rows");
+  std::size_t cols = 0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (!rows[i].is_array() || rows[i].empty())
+      throw InputError("model: field \"" + name + "\" row " + std::to_string(i + 1) +
+                       " must be a non-empty array");
+    if (i == 0) cols = rows[i].size();
+    if (rows[i].size() != cols)
+      throw InputError("model: field \"" + name + "\" row " + std::to_string(i + 1) + " has " +
+                       std::to_string(rows[i].size()) + " entries, row 1 has " + std::to_string(cols));
+  }
+  MatrixR X(rows.size(), cols);
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    for (std::size_t j = 0; j < cols; ++j)
+      X(i, j) = json_to_real(rows[i][j], "model: field \"" + name + "\" row " + std::to_string(i + 1) +
+                                             " column " + std::to_string(j + 1));
+  return X;
+}
+
+json matrix_to_json(const MatrixR& X, int digits) {
+  json rows = json::array();
+  for (Eigen::Index i = 0; i < X.rows(); ++i) {
+    json row = json::array();
+    for (Eigen::Index j = 0; j < X.cols(); ++j) row.push_back(to_decimal(X(i, j), digits));
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> cells;
+  std::stringstream stream(line);
+  std::string cell;
+  while (std::getline(stream, cell, ',')) cells.push_back(trim(cell));
+  if (!line.empty() && line.back() == ',') cells.push_back("");
+  return cells;
+}
+
+std::vector<std::string> spectrum_header(int m) {
+  std::vector<std::string> names{"omega"};
+  if (m == 1) {
+    names.push_back("S_re");
+    names.push_back("S_im");
+    return names;
+  }
+  for (int a = 1; a <= m; ++a)
+    for (int b = 1; b <= m; ++b) {
+      const std::string entry = "S" + std::to_string(a) + std::to_string(b);
+      names.push_back(entry + "_re");
+      names.push_back(entry + "_im");
+    }
+  return names;
+}
+
+}  // namespace
+
+Real parse_decimal(const std::string& text) {
+  const std::string t = trim(text);
+  if (!is_decimal(t)) throw InputError("not a decimal number: '" + text + "'");
+  // Boost converts the full decimal text exactly (integer arithmetic), then rounds once.
+  return Real(t[0] == '+' ? t.substr(1) : t);
+}
+
+std::string to_decimal(const Real& x, int digits) {
+  return x.str(std::max(digits, 1) - 1, std::ios_base::scientific);
+}
+
+Model model_from_json(const json& j) {
+  if (!j.is_object()) throw InputError("model: expected a JSON object");
+  Model model;
+  if (j.contains("domain")) {
+    if (!j.at("domain").is_string()) throw InputError("model: field \"domain\" must be a string");
+    model.domain = j.at("domain").get<std::string>();
+    if (model.domain != "discrete" && model.domain != "continuous")
+      throw InputError("model: field \"domain\" must be \"discrete\" or \"continuous\", got \"" +
+                       model.domain + "\"");
+  }
+  if (j.contains("sample_time")) {
+    model.sample_time = json_to_real(j.at("sample_time"), "model: field \"sample_time\"");
+    if (!(model.sample_time > 0)) throw InputError("model: field \"sample_time\" must be positive");
+  }
+  model.A = matrix_field(j, "A");
+  model.B = matrix_field(j, "B");
+  model.C = matrix_field(j, "C");
+  model.D = matrix_field(j, "D");
+  const auto n = model.A.rows();
+  if (model.A.cols() != n) throw InputError("model: A is not square");
+  if (model.B.rows() != n) throw InputError("model: B has " + std::to_string(model.B.rows()) +
+                                            " rows, A has " + std::to_string(n));
+  if (model.C.cols() != n) throw InputError("model: C has " + std::to_string(model.C.cols()) +
+                                            " columns, A has " + std::to_string(n));
+  if (model.D.rows() != model.C.rows() || model.D.cols() != model.B.cols())
+    throw InputError("model: D must be " + std::to_string(model.C.rows()) + "x" +
+                     std::to_string(model.B.cols()) + " (rows of C x columns of B)");
+  return model;
+}
+
+json model_to_json(const Model& model, int digits) {
+  json j;
+  j["domain"] = model.domain;
+  j["sample_time"] = to_decimal(model.sample_time, digits);
+  j["A"] = matrix_to_json(model.A, digits);
+  j["B"] = matrix_to_json(model.B, digits);
+  j["C"] = matrix_to_json(model.C, digits);
+  j["D"] = matrix_to_json(model.D, digits);
+  return j;
+}
+
+Model read_model(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open");
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::exception& e) {
+    throw InputError(path + ": invalid JSON: " + e.what());
+  }
+  try {
+    return model_from_json(j);
+  } catch (const InputError& e) {
+    throw InputError(path + ": " + e.what());
+  }
+}
+
+json result_to_json(const Result& result, bool van_overschee, int digits) {
+  json j = model_to_json(result.model, digits);
+  j["order"] = result.order;
+  j["method"] = van_overschee ? "vo1997" : "akcay2011";
+  j["p"] = result.p;
+  j["r"] = result.r;
+  json sigma = json::array();
+  for (const Real& s : van_overschee ? result.singular_values_vo : result.singular_values_Y)
+    sigma.push_back(to_decimal(s, digits));
+  j["singular_values"] = sigma;
+  json poles = json::array();
+  for (const Complex& z : result.poles)
+    poles.push_back(json::array({to_decimal(z.real(), digits), to_decimal(z.imag(), digits)}));
+  j["poles"] = poles;
+  j["E"] = matrix_to_json(result.E, digits);
+  j["F"] = matrix_to_json(result.F, digits);
+  j["P"] = matrix_to_json(result.P, digits);
+  return j;
+}
+
+Spectrum read_spectrum_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open");
+  auto fail = [&](int line, const std::string& what) {
+    throw InputError(path + ":" + std::to_string(line) + ": " + what);
+  };
+  std::string line;
+  int line_number = 0;
+  std::vector<std::string> header;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (!trim(line).empty()) {
+      header = split_csv(trim(line));
+      break;
+    }
+  }
+  if (header.empty()) fail(line_number, "empty file, expected header omega,S_re,S_im,...");
+  const int header_line = line_number;
+  // 1 + 2m² columns.
+  const std::size_t cols = header.size();
+  int m = 0;
+  while (1 + 2 * static_cast<std::size_t>(m + 1) * (m + 1) <= cols) ++m;
+  if (m < 1 || 1 + 2 * static_cast<std::size_t>(m) * m != cols)
+    fail(header_line, std::to_string(cols) + " columns; expected 1 + 2m^2 (omega,S_re,S_im for m = 1)");
+  const std::vector<std::string> expected = spectrum_header(m);
+  bool matches = header == expected;
+  if (!matches && m == 1) matches = header == std::vector<std::string>{"omega", "S11_re", "S11_im"};
+  if (!matches) {
+    std::string want;
+    for (const std::string& name : expected) want += (want.empty() ? "" : ",") + name;
+    fail(header_line, "header must be " + want);
+  }
+
+  std::vector<Real> omega;
+  std::vector<int> omega_line;
+  Spectrum spectrum;
+  spectrum.m = m;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (trim(line).empty()) continue;
+    const std::vector<std::string> cells = split_csv(trim(line));
+    if (cells.size() != cols)
+      fail(line_number, std::to_string(cells.size()) + " cells, header has " + std::to_string(cols));
+    std::vector<Real> values(cols);
+    for (std::size_t c = 0; c < cols; ++c) {
+      try {
+        values[c] = parse_decimal(cells[c]);
+      } catch (const InputError& e) {
+        fail(line_number, "column " + expected[c] + ": " + e.what());
+      }
+    }
+    MatrixC S(m, m);
+    for (int a = 0; a < m; ++a)
+      for (int b = 0; b < m; ++b) {
+        const std::size_t c = 1 + 2 * static_cast<std::size_t>(a * m + b);
+        S(a, b) = Complex(values[c], values[c + 1]);
+      }
+    omega.push_back(values[0]);
+    omega_line.push_back(line_number);
+    spectrum.S.push_back(S);
+  }
+  if (spectrum.S.size() < 2)
+    fail(line_number, "need at least 2 samples (M >= 1), got " + std::to_string(spectrum.S.size()));
+  spectrum.M = static_cast<int>(spectrum.S.size()) - 1;
+  const Real pi = boost::math::constants::pi<Real>();
+  const Real tolerance = Real("1e-9") * pi;
+  for (std::size_t k = 0; k < omega.size(); ++k) {
+    const Real grid = pi * Real(static_cast<int>(k)) / Real(spectrum.M);
+    if (abs(omega[k] - grid) > tolerance)
+      fail(omega_line[k], "omega = " + to_decimal(omega[k], 17) + " is off the uniform grid pi(k-1)/M = " +
+                              to_decimal(grid, 17) + " (k = " + std::to_string(k + 1) +
+                              ", M = " + std::to_string(spectrum.M) + ")");
+  }
+  return spectrum;
+}
+
+void write_spectrum_csv(const Spectrum& spectrum, const std::string& path, int digits) {
+  if (spectrum.m < 1 || spectrum.M < 1 || static_cast<int>(spectrum.S.size()) != spectrum.M + 1)
+    throw InputError(path + ": spectrum to write is malformed (need m >= 1, M >= 1, M + 1 samples)");
+  std::ofstream out(path);
+  if (!out) throw InputError(path + ": cannot open for writing");
+  const std::vector<std::string> names = spectrum_header(spectrum.m);
+  for (std::size_t c = 0; c < names.size(); ++c) out << (c ? "," : "") << names[c];
+  out << '\n';
+  const Real pi = boost::math::constants::pi<Real>();
+  for (int k = 0; k <= spectrum.M; ++k) {
+    out << to_decimal(pi * Real(k) / Real(spectrum.M), digits);
+    for (int a = 0; a < spectrum.m; ++a)
+      for (int b = 0; b < spectrum.m; ++b)
+        out << ',' << to_decimal(spectrum.S[k](a, b).real(), digits) << ','
+            << to_decimal(spectrum.S[k](a, b).imag(), digits);
+    out << '\n';
+  }
+  if (!out) throw InputError(path + ": write failed");
+}
+
+}  // namespace fdsid::reference
