@@ -15,6 +15,7 @@
 #include "fdsid/io.hpp"
 #include "fdsid/paper.hpp"
 #include "fdsid/spectrum_id.hpp"
+#include "high_precision.hpp"
 
 namespace {
 
@@ -122,10 +123,8 @@ int run_identify_spectrum(const std::string& json_path, const std::string& data_
                           int p, int r, const std::string& method, const std::string& precision,
                           const std::string& extension) {
   Out out{json_path == "-"};
-  if (precision != "double")
-    throw fdsid::Error(fdsid::ErrorKind::Input, "--precision",
-                       precision == "high" ? "the high-precision reference is not built in this version"
-                                           : "\"" + precision + "\" is not double or high");
+  if (precision != "double" && precision != "high")
+    throw fdsid::Error(fdsid::ErrorKind::Input, "--precision", "\"" + precision + "\" is not double or high");
   fdsid::SpectrumOptions so;
   if (method == "akcay2011") so.method = fdsid::Method::Akcay2011;
   else if (method == "vo1997") so.method = fdsid::Method::VanOverschee1997;
@@ -135,6 +134,9 @@ int run_identify_spectrum(const std::string& json_path, const std::string& data_
   so.p = p;
   so.r = r;
   so.extension = parse_extension(extension);
+  if (precision == "high")
+    return fdsid::cli::identify_spectrum_high(json_path, data_path, so.order, p, r,
+                                              so.method == fdsid::Method::VanOverschee1997, so.extension);
   const fdsid::SpectrumData data = fdsid::read_spectrum_csv(data_path);
   fdsid::SpectrumResult res;
   try {
@@ -211,7 +213,7 @@ int main(int argc, char** argv) {
   t2->add_option("--M", t2o.Ms, "data lengths (default 1000 2000 4000 8000 16000 32000)");
 
   auto* ids = app.add_subcommand("identify-spectrum", "spectral factor from power-spectrum samples");
-  std::string data_path, order = "auto", method = "akcay2011", precision = "double", extension = "hermitian-part";
+  std::string data_path, model_path, order = "auto", method = "akcay2011", precision = "double", extension = "hermitian-part";
   int p = 0, r = 0;
   ids->add_option("--data", data_path, "power-spectrum CSV")->required();
   ids->add_option("--json", json_path, "write the identified model here (- = stdout)");
@@ -222,8 +224,15 @@ int main(int argc, char** argv) {
   ids->add_option("--precision", precision, "double (default) or high");
   ids->add_option("--extension", extension, "step 1 reading: hermitian-part (default) or conjugate");
 
+  auto* chk = app.add_subcommand("check", "oracle: compare a candidate model with the high-precision reference");
+  double tolerance = 0;
+  chk->add_option("--model", model_path, "candidate model JSON")->required();
+  chk->add_option("--data", data_path, "power-spectrum CSV the candidate was identified from")->required();
+  chk->add_option("--json", json_path, "write the comparison here (- = stdout)");
+  chk->add_option("--tolerance", tolerance, "relative tolerance (default: derived, see README)");
+
   auto* smp = app.add_subcommand("sample-spectrum", "sample a model's power spectrum on the uniform grid into CSV");
-  std::string model_path, out_path = "-";
+  std::string out_path = "-";
   int M = 0;
   double epsilon = 0;
   std::uint64_t seed = 1;
@@ -232,10 +241,12 @@ int main(int argc, char** argv) {
   smp->add_option("--epsilon", epsilon, "add Akcay (2011) Section 4 noise of this level");
   smp->add_option("--seed", seed, "random seed of the noise");
   smp->add_option("--out", out_path, "CSV output (- = stdout)");
+  std::string smp_precision = "double";
+  smp->add_option("--precision", smp_precision, "double (default) or high (50-digit reference, 40 digits written)");
 
   // CLI11 reports an unknown subcommand as "A subcommand is required"; name it.
   {
-    const std::vector<std::string> top = {"reproduce", "identify-spectrum", "sample-spectrum"};
+    const std::vector<std::string> top = {"reproduce", "identify-spectrum", "check", "sample-spectrum"};
     const std::vector<std::string> targets = {"table1", "table2"};
     auto unknown = [](const std::string& word, const std::vector<std::string>& known) {
       return !word.empty() && word[0] != '-' && std::find(known.begin(), known.end(), word) == known.end();
@@ -261,7 +272,7 @@ int main(int argc, char** argv) {
   }
 
   try {
-    for (const CLI::App* sub : {t1, t2, ids})
+    for (const CLI::App* sub : {t1, t2, ids, chk})
       if (sub->parsed() && sub->count("--json") > 0 && json_path.empty())
         throw fdsid::Error(fdsid::ErrorKind::Input, "--json", "empty path (use - for stdout)");
     if (t1->parsed()) return run_table1(json_path);
@@ -272,8 +283,20 @@ int main(int argc, char** argv) {
       else throw fdsid::Error(fdsid::ErrorKind::Input, "--noise-variance", "\"" + t2_noise + "\" is not unit-complex or unit-per-component");
       return run_table2(json_path, t2o);
     }
-    if (ids->parsed()) return run_identify_spectrum(json_path, data_path, order, p, r, method, precision, extension);
-    if (smp->parsed()) return run_sample_spectrum(model_path, M, epsilon, seed, out_path);
+    if (ids->parsed())
+      return run_identify_spectrum(json_path, data_path, order, p, r, method, precision, extension);
+    if (chk->parsed()) return fdsid::cli::check(json_path, model_path, data_path, tolerance);
+    if (smp->parsed()) {
+      if (smp_precision == "high") {
+        if (epsilon != 0) throw fdsid::Error(fdsid::ErrorKind::Input, "--epsilon", "noise is only added in double precision");
+        if (M < 1 || M > 100000) throw fdsid::Error(fdsid::ErrorKind::Input, "--M", "must be in 1 .. 100000 with --precision high");
+        if (out_path == "-") throw fdsid::Error(fdsid::ErrorKind::Input, "--out", "--precision high writes to a file");
+        return fdsid::cli::sample_spectrum_high(model_path, M, out_path);
+      }
+      if (smp_precision != "double")
+        throw fdsid::Error(fdsid::ErrorKind::Input, "--precision", "\"" + smp_precision + "\" is not double or high");
+      return run_sample_spectrum(model_path, M, epsilon, seed, out_path);
+    }
   } catch (const fdsid::Error& e) {
     std::cerr << "fdsid: " << e.what() << "\n";
     return 2;

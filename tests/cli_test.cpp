@@ -660,3 +660,88 @@ TEST_F(Cli, ConstantNegativeSpectrumNotPositive) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------
+// High precision and the oracle (`check`).
+
+namespace {
+// Akçay (2011) Section 4 system as decimal strings, optionally with the second
+// 2x2 block's diagonal shifted (moving that pole pair by exactly 1e-4), or
+// transformed by T = P diag(2, 1, 0.5, 1), P swapping states 1 and 3: scalings
+// by powers of two and permutations are exact in binary floating point, so the
+// transformed model has the same transfer function to the last bit.
+std::string paper_model_json(bool transformed, bool moved = false) {
+  const std::string d33 = moved ? "-0.6128" : "-0.6129";  // +1e-4 on the block's diagonal moves
+  const std::string d44 = moved ? "-0.7418" : "-0.7419";  // its pole pair by exactly 1e-4
+  if (!transformed)
+    return R"({"domain":"discrete","sample_time":1,
+      "A":[["0.8876","0.4494","0","0"],["-0.4494","0.7978","0","0"],["0","0",")" + d33 + R"(","0.0645"],["0","0","-6.4516",")" + d44 + R"("]],
+      "B":[["0.2247"],["0.8989"],["0.0323"],["0.1290"]],"C":[["0.4719","0.1124","9.6774","1.6129"]],"D":[["0.9626"]]})";
+  // x' = T^{-1} x with T = P S, S = diag(2, 1, 0.5, 1): A' = S^{-1} P A P S, B' = S^{-1} P B, C' = C P S.
+  // P A P swaps rows/columns 1 and 3; then A'_{ij} = A_{p(i)p(j)} s_j / s_i.
+  return R"({"domain":"discrete","sample_time":1,
+    "A":[["-0.6129","0","0","0.03225"],["0","0.7978","-0.2247","0"],["0","0.8988","0.8876","0"],["-12.9032","0","0","-0.7419"]],
+    "B":[["0.01615"],["0.8989"],["0.4494"],["0.1290"]],"C":[["19.3548","0.1124","0.23595","1.6129"]],"D":[["0.9626"]]})";
+}
+}  // namespace
+
+TEST_F(Cli, HighPrecisionSamplesAndIdentifiesWithFortyDigits) {
+  const std::string model = write("paper.json", paper_model_json(false));
+  const std::string data = path("hp.csv");
+  ASSERT_TRUE(Succeeded(run_fdsid({"sample-spectrum", "--model", model, "--M", "32", "--precision", "high", "--out", data})));
+  const std::string out = path("hp.json");
+  const RunResult r = identify(data, {"--precision", "high", "--order", "4", "--p", "9", "--r", "8", "--json", out});
+  ASSERT_TRUE(Succeeded(r)) << describe(r);
+  std::ifstream f(out);
+  const json j = json::parse(f);
+  ASSERT_EQ(j.at("poles").size(), 4u);
+  for (const auto& pz : j["poles"]) {
+    const std::string re = pz[0].get<std::string>();
+    // at least 30 significant digits: count the digits of the mantissa
+    size_t digits = 0;
+    for (char c : re.substr(0, re.find('e'))) digits += std::isdigit(static_cast<unsigned char>(c)) ? 1 : 0;
+    EXPECT_GE(digits, 30u) << re;
+    const std::complex<double> z(std::stod(re), std::stod(pz[1].get<std::string>()));
+    double nearest = 1e300;
+    for (const auto& t : paper_poles()) nearest = std::min(nearest, std::abs(z - t));
+    EXPECT_LT(nearest, 1e-14) << "pole " << pz.dump();  // exact data: the 50-digit result rounds to the true pole
+  }
+  for (const auto& row : j.at("A")) for (const auto& v : row) EXPECT_TRUE(v.is_string());
+}
+
+TEST_F(Cli, CheckAcceptsASimilarityTransformOfTheTrueSystem) {
+  const std::string model = write("paper.json", paper_model_json(false));
+  const std::string data = path("hp.csv");
+  ASSERT_TRUE(Succeeded(run_fdsid({"sample-spectrum", "--model", model, "--M", "64", "--precision", "high", "--out", data})));
+  const std::string cand = write("similar.json", paper_model_json(true));
+  const std::string out = path("check.json");
+  const RunResult r = run_fdsid({"check", "--model", cand, "--data", data, "--json", out});
+  EXPECT_EQ(r.status, 0) << describe(r);
+  std::ifstream f(out);
+  const json j = json::parse(f);
+  EXPECT_TRUE(j.at("agree").get<bool>());
+  EXPECT_LE(j.at("spectrum_error").get<double>(), j.at("tolerance").at("spectrum").get<double>());
+  // the untransformed system passes too
+  EXPECT_EQ(run_fdsid({"check", "--model", model, "--data", data}).status, 0);
+}
+
+TEST_F(Cli, CheckRejectsAPoleMovedByOneTenThousandth) {
+  const std::string model = write("paper.json", paper_model_json(false));
+  const std::string data = path("hp.csv");
+  ASSERT_TRUE(Succeeded(run_fdsid({"sample-spectrum", "--model", model, "--M", "64", "--precision", "high", "--out", data})));
+  const std::string cand = write("moved.json", paper_model_json(false, true));
+  const RunResult r = run_fdsid({"check", "--model", cand, "--data", data, "--json", "-"});
+  EXPECT_EQ(r.status, 1) << describe(r);
+  const json j = json::parse(r.out);
+  EXPECT_FALSE(j.at("agree").get<bool>());
+  EXPECT_NEAR(j.at("pole_distance").get<double>(), 1e-4, 1e-6);  // the pair moved by exactly 1e-4
+}
+
+TEST_F(Cli, CheckRefusesBadCandidates) {
+  const std::string data = good_spectrum(32);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", path("none.json"), "--data", data}), {"none.json"}));
+  const std::string nonsquare = write("ns.json", R"({"A":[[0.5]],"B":[[1,1]],"C":[[1]],"D":[[1,0]]})");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", nonsquare, "--data", data}), {"square"}));
+  const std::string badp = write("bp.json", R"({"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]],"p":-3})");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", badp, "--data", data}), {"\"p\""}));
+}

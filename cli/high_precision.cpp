@@ -1,0 +1,159 @@
+#include "high_precision.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+#include "fdsid/compare.hpp"
+#include "fdsid/error.hpp"
+#include "fdsid/io.hpp"
+#include "fdsid/reference/io.hpp"
+#include "fdsid/reference/spectrum_id.hpp"
+#include "fdsid/spectrum_id.hpp"
+
+namespace fdsid::cli {
+
+namespace {
+
+using nlohmann::json;
+
+double to_double(const json& decimal) { return std::stod(decimal.get<std::string>()); }
+
+// Runs the reference, turning its errors into the library's typed errors
+// (input problems and failed steps both exit 2 with one line).
+reference::Result run_reference(const std::string& data_path, int order, int& p, int& r, bool vo, Extension ext,
+                                int& m, int& M) {
+  try {
+    reference::Spectrum spectrum = reference::read_spectrum_csv(data_path);
+    if (ext == Extension::HermitianPart)
+      for (auto& S : spectrum.S) S = ((S + S.adjoint()) / reference::Real(2)).eval();
+    m = spectrum.m;
+    M = spectrum.M;
+    int dp, dr;
+    default_pr(M, order, dp, dr);  // the same documented default rule as fast/
+    if (p == 0) p = dp;
+    if (r == 0) r = dr;
+    return reference::identify_spectrum(spectrum, order, p, r, vo);
+  } catch (const reference::StepError& e) {
+    throw Error(ErrorKind::Numerical, data_path, std::string("reference: ") + e.what());
+  } catch (const reference::Error& e) {
+    throw Error(ErrorKind::Input, data_path, e.what());
+  }
+}
+
+}  // namespace
+
+int identify_spectrum_high(const std::string& json_path, const std::string& data_path, int order, int p, int r,
+                           bool vo, Extension ext) {
+  int m = 0, M = 0;
+  const reference::Result res = run_reference(data_path, order, p, r, vo, ext, m, M);
+  json j = reference::result_to_json(res, vo, 40);
+  j["extension"] = to_string(ext);
+  j["data"] = data_path;
+  j["precision"] = "high (50-digit binary floating point, Boost.Multiprecision cpp_bin_float<50>)";
+  if (json_path != "-") {
+    std::cout << "identified order " << res.order << " in high precision by " << (vo ? "vo1997" : "akcay2011")
+              << " from M = " << M << ", m = " << m << ", p = " << res.p << ", r = " << res.r << "\npoles:";
+    for (const auto& z : j["poles"]) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "  %.15g%+.15gi", to_double(z[0]), to_double(z[1]));
+      std::cout << buf;
+    }
+    std::cout << "\n(the JSON has 40 significant digits)\n";
+  }
+  if (!json_path.empty()) write_text_file(json_path, j.dump(2) + "\n");
+  return 0;
+}
+
+int check(const std::string& json_path, const std::string& model_path, const std::string& data_path,
+          double tolerance) {
+  // The candidate: a model file; p, r, method taken from it when present (an
+  // identified-model JSON of the contracts), else the documented defaults.
+  std::ifstream f(model_path);
+  if (!f) throw Error(ErrorKind::Input, model_path, "cannot open candidate model");
+  json cj;
+  try {
+    cj = json::parse(f);
+  } catch (const json::parse_error& e) {
+    throw Error(ErrorKind::Input, model_path, std::string("malformed JSON: ") + e.what());
+  }
+  const StateSpace candidate = model_from_json(cj, model_path);
+  auto int_field = [&](const char* key) {
+    if (!cj.contains(key)) return 0;
+    if (!cj[key].is_number_integer() || cj[key].get<int>() < 1)
+      throw Error(ErrorKind::Input, model_path + " field \"" + key + "\"", "must be a positive integer");
+    return cj[key].get<int>();
+  };
+  int p = int_field("p"), r = int_field("r");
+  const bool vo = cj.contains("method") && cj["method"] == "vo1997";
+  const Extension ext =
+      cj.contains("extension") && cj["extension"] == "conjugate" ? Extension::Conjugate : Extension::HermitianPart;
+  if (candidate.order() < 1) throw Error(ErrorKind::Input, model_path, "candidate has order 0");
+
+  int m = 0, M = 0;
+  const reference::Result res = run_reference(data_path, candidate.order(), p, r, vo, ext, m, M);
+  const json rj = reference::result_to_json(res, vo, 40);
+  const StateSpace ref = model_from_json(rj, "reference model");  // decimal strings, correctly rounded
+  const ModelComparison c = compare_models(candidate, ref);
+
+  // Default tolerance: what a correct double-precision implementation reaches on
+  // these data (compare.hpp), with σ1/σ_2n from the reference's 𝒴 or Ĝ_pF_r; the
+  // poles and Markov parameters get the eigenvalue condition number of Â on top.
+  const int n = res.order;
+  const double ratio = to_double(rj["singular_values"][0]) / to_double(rj["singular_values"][2 * n - 1]);
+  const double spectrum_tol = tolerance > 0 ? tolerance : double_precision_spectrum_tolerance(p, r, m, 2 * M, ratio);
+  Eigen::EigenSolver<Eigen::MatrixXd> es(ref.A);
+  const Eigen::MatrixXcd V = es.eigenvectors(), W = V.inverse();
+  double kappa = 1;
+  for (int i = 0; i < n; ++i) kappa = std::max(kappa, V.col(i).norm() * W.row(i).norm());
+  const double pole_tol = tolerance > 0 ? tolerance : kappa * spectrum_tol;
+
+  const bool orders_agree = c.candidate_order == c.reference_order;
+  const bool agree = orders_agree && c.pole_distance <= pole_tol && c.spectrum_error <= spectrum_tol &&
+                     c.markov_error <= pole_tol;
+  json j = {{"agree", agree},
+            {"candidate", model_path},
+            {"data", data_path},
+            {"order", {{"candidate", c.candidate_order}, {"reference", c.reference_order}}},
+            {"p", p},
+            {"r", r},
+            {"method", vo ? "vo1997" : "akcay2011"},
+            {"extension", to_string(ext)},
+            {"pole_distance", c.pole_distance},
+            {"spectrum_error", c.spectrum_error},
+            {"spectrum_error_omega", c.spectrum_error_omega},
+            {"markov_error", c.markov_error},
+            {"markov_error_k", c.markov_error_k},
+            {"tolerance",
+             {{"spectrum", spectrum_tol},
+              {"poles_and_markov", pole_tol},
+              {"rule", tolerance > 0 ? "given by --tolerance"
+                                     : "4 (p + r) m log2(N) u sigma1/sigma2n (spectrum), times the eigenvalue "
+                                       "condition number of A for poles and Markov parameters"}}},
+            {"reference_model", rj}};
+  if (json_path != "-") {
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "%s: poles %.3e (tol %.1e), spectrum %.3e at omega = %.4f (tol %.1e), Markov R(%d) %.3e (tol %.1e)\n",
+                  agree ? "AGREES" : "DISAGREES", c.pole_distance, pole_tol, c.spectrum_error, c.spectrum_error_omega,
+                  spectrum_tol, c.markov_error_k, c.markov_error, pole_tol);
+    std::cout << (orders_agree ? "" : "orders differ: candidate " + std::to_string(c.candidate_order) +
+                                          ", reference " + std::to_string(c.reference_order) + "\n")
+              << line;
+  }
+  if (!json_path.empty()) write_text_file(json_path, j.dump(2) + "\n");
+  return agree ? 0 : 1;
+}
+
+int sample_spectrum_high(const std::string& model_path, int M, const std::string& out_path) {
+  try {
+    const reference::Model model = reference::read_model(model_path);
+    reference::write_spectrum_csv(reference::sample_spectrum(model, M), out_path, 40);
+  } catch (const reference::Error& e) {
+    throw Error(ErrorKind::Input, model_path, e.what());
+  }
+  return 0;
+}
+
+}  // namespace fdsid::cli

@@ -1,0 +1,28 @@
+#pragma once
+// Subcommands served by the high-precision reference (reference/): kept apart
+// from fdsid.cpp so that only this file sees the multiprecision types.
+#include <string>
+
+#include "fdsid/spectrum_id.hpp"
+
+namespace fdsid::cli {
+
+/// `identify-spectrum --precision high`: Algorithm 1 in 50 digits; the JSON
+/// carries every number as a decimal string of 40 significant digits.
+/// The reference implements the paper's conjugate extension; the Hermitian-part
+/// reading is obtained by replacing each sample by (S + S^H)/2 first (exact in 50
+/// digits), which is what that reading means.
+int identify_spectrum_high(const std::string& json_path, const std::string& data_path, int order, int p, int r,
+                           bool van_overschee, Extension extension);
+
+/// `check`: identify with the reference and compare the candidate in
+/// similarity-invariant terms, with the candidate's p, r, method and extension
+/// when its JSON names them. tolerance <= 0 uses the derived default.
+int check(const std::string& json_path, const std::string& model_path, const std::string& data_path,
+          double tolerance);
+
+/// `sample-spectrum --precision high`: the model's spectrum from its decimal
+/// entries in 50 digits, written with 40 significant digits.
+int sample_spectrum_high(const std::string& model_path, int M, const std::string& out_path);
+
+}  // namespace fdsid::cli
