@@ -1,0 +1,117 @@
+// Property: fast/ (double, FFT, Eq. 19) agrees with reference/ (50 digits,
+// Kronecker products, Eq. 16) on random systems, with noise-free and noisy
+// spectra, within the accuracy a backward-stable double computation can reach.
+#include <gtest/gtest.h>
+#include <rapidcheck/gtest.h>
+
+#include <random>
+
+#include "fdsid/error.hpp"
+#include "fdsid/reference/spectrum_id.hpp"
+#include "fdsid/spectrum_id.hpp"
+#include "rc_generators.hpp"
+#include "tolerance.hpp"
+
+namespace fdsid::testing {
+namespace {
+
+reference::Spectrum to_reference(const SpectrumData& d) {
+  reference::Spectrum s;
+  s.m = d.m;
+  s.M = d.M;
+  for (int k = 0; k <= d.M; ++k) {
+    reference::MatrixC S(d.m, d.m);
+    for (int a = 0; a < d.m; ++a)
+      for (int b = 0; b < d.m; ++b)  // every double is exactly representable in 50 digits
+        S(a, b) = reference::Complex(reference::Real(d.at(a, b, k).real()), reference::Real(d.at(a, b, k).imag()));
+    s.S.push_back(S);
+  }
+  return s;
+}
+
+StateSpace to_double(const reference::Model& m) {
+  auto conv = [](const reference::MatrixR& X) {
+    Eigen::MatrixXd Y(X.rows(), X.cols());
+    for (Eigen::Index i = 0; i < X.rows(); ++i)
+      for (Eigen::Index j = 0; j < X.cols(); ++j) Y(i, j) = X(i, j).convert_to<double>();
+    return Y;
+  };
+  StateSpace s;
+  s.A = conv(m.A);
+  s.B = conv(m.B);
+  s.C = conv(m.C);
+  s.D = conv(m.D);
+  return s;
+}
+
+RC_GTEST_PROP(FastVsReference, AgreeOnNoiseFreeAndNoisySpectra, ()) {
+  const SystemSpec spec = *gen_system_spec(2, 4);
+  const StateSpace sys = make_system(spec);
+  const int n = sys.order(), m = sys.outputs();
+  const int p = 2 * n + 1, r = 2 * n;
+  const int M = *rc::gen::inRange((p + r + 1) / 2 + 1, 41);
+  const bool noisy = *rc::gen::arbitrary<bool>();
+  RC_CLASSIFY(noisy, "noisy");
+  RC_CLASSIFY(m > 1, "MIMO");
+
+  SpectrumData d;
+  d.m = m;
+  d.M = M;
+  d.S = sample_spectrum(sys, M);
+  if (noisy) {  // Hermitian noise of 1e-3 relative size: a perturbed but positive spectrum
+    std::mt19937_64 gen(*rc::gen::arbitrary<std::uint64_t>());
+    std::normal_distribution<double> g(0.0, 1e-3 * d.S.cwiseAbs().maxCoeff());
+    for (int k = 0; k <= M; ++k) {
+      Eigen::MatrixXcd X(m, m);
+      for (int i = 0; i < m * m; ++i) X(i) = cplx(g(gen), g(gen));
+      const Eigen::MatrixXcd H = 0.5 * (X + X.adjoint());
+      d.S.col(k) += Eigen::Map<const Eigen::VectorXcd>(H.data(), m * m);
+    }
+  }
+  SpectrumOptions o;
+  o.order = n;
+  o.p = p;
+  o.r = r;
+  o.extension = Extension::Conjugate;  // the reference's reading (identical on Hermitian data)
+  SpectrumResult f;
+  try {
+    f = identify_spectrum(d, o);
+  } catch (const fdsid::Error& e) {
+    RC_DISCARD(std::string("noise made the data unusable: ") + e.what());  // e.g. no positive fit
+  }
+  const reference::Result ref = reference::identify_spectrum(to_reference(d), n, p, r, false);
+  const StateSpace g = to_double(ref.model);
+
+  // Tolerance: compare.hpp's bound for the double computation, with the Wedin gap
+  // σ_2n - σ_2n+1 (not σ_2n) since noisy 𝒴 is not of rank 2n; the reference is
+  // exact to ~1e-45 in comparison. Poles: times the condition number of the
+  // eigenvalues of Â (the reference's, converted).
+  const double s1 = ref.singular_values_Y[0].convert_to<double>();
+  const double gap = (ref.singular_values_Y[2 * n - 1] -
+                      (ref.singular_values_Y.size() > static_cast<size_t>(2 * n) ? ref.singular_values_Y[2 * n] : 0))
+                         .convert_to<double>();
+  const double tol = double_precision_spectrum_tolerance(p, r, m, 2 * M, s1 / gap);
+  double err = 0, scale = 0;
+  for (int k = 0; k <= 2 * M; ++k) {
+    const cplx z = std::polar(1.0, M_PI * k / (2.0 * M));
+    const Eigen::MatrixXcd S = power_spectrum(g, z);
+    err = std::max(err, (power_spectrum(f.model, z) - S).norm());
+    scale = std::max(scale, S.norm());
+  }
+  RC_LOG() << "M = " << M << ", noisy = " << noisy << ", relative spectrum difference " << err / scale
+           << ", tolerance " << tol << "\n";
+  RC_ASSERT(err / scale <= tol);
+  const Eigen::VectorXcd a = poles(g), b = poles(f.model);
+  double pole_err = 0;
+  for (Eigen::Index i = 0; i < a.size(); ++i) pole_err = std::max(pole_err, (b.array() - a(i)).abs().minCoeff());
+  RC_ASSERT(pole_err <= eigenvalue_condition(shift_matrix(
+                            Eigen::JacobiSVD<Eigen::MatrixXd>(akcay_matrix(fourier_coefficients(d, o.extension), m, p, r),
+                                                              Eigen::ComputeThinU)
+                                .matrixU()
+                                .leftCols(2 * n),
+                            m)) *
+                            tol);
+}
+
+}  // namespace
+}  // namespace fdsid::testing
