@@ -79,7 +79,17 @@ RC_GTEST_PROP(FastVsReference, AgreeOnNoiseFreeAndNoisySpectra, ()) {
   } catch (const fdsid::Error& e) {
     RC_DISCARD(std::string("noise made the data unusable: ") + e.what());  // e.g. no positive fit
   }
-  const reference::Result ref = reference::identify_spectrum(to_reference(d), n, p, r, false);
+  reference::Result ref;
+  try {
+    ref = reference::identify_spectrum(to_reference(d), n, p, r, false);
+  } catch (const reference::StepError& e) {
+    // Known open discrepancy (closing note of issue 3): on rare noisy cases with
+    // M ~ 10 the reference's Riccati Newton iteration stalls where fast/'s
+    // Kalman iteration returns a minimum-phase factor. Noise-free cases must
+    // never get here.
+    RC_ASSERT(noisy);
+    RC_DISCARD(std::string("reference failed on noisy data: ") + e.what());
+  }
   const StateSpace g = to_double(ref.model);
 
   // Tolerance: compare.hpp's bound for the double computation, with the Wedin gap
@@ -101,6 +111,17 @@ RC_GTEST_PROP(FastVsReference, AgreeOnNoiseFreeAndNoisySpectra, ()) {
   RC_LOG() << "M = " << M << ", noisy = " << noisy << ", relative spectrum difference " << err / scale
            << ", tolerance " << tol << "\n";
   RC_ASSERT(err / scale <= tol);
+  if (!noisy) {
+    // Both interpolate (Theorem 1): the reference's model, rounded to double, has the
+    // true spectrum up to the rounding of the double samples it was given, which
+    // the same bound covers.
+    double terr = 0;
+    for (int k = 0; k <= 2 * M; ++k) {
+      const cplx z = std::polar(1.0, M_PI * k / (2.0 * M));
+      terr = std::max(terr, (power_spectrum(g, z) - power_spectrum(sys, z)).norm());
+    }
+    RC_ASSERT(terr / scale <= tol);
+  }
   const Eigen::VectorXcd a = poles(g), b = poles(f.model);
   double pole_err = 0;
   for (Eigen::Index i = 0; i < a.size(); ++i) pole_err = std::max(pole_err, (b.array() - a(i)).abs().minCoeff());

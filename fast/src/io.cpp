@@ -164,6 +164,7 @@ nlohmann::json result_to_json(const SpectrumResult& r) {
                    {"P", matrix_to_json(r.summands.P)}};
   j["diagnostics"] = {{"split_margin", r.split_margin},
                       {"min_spectrum_on_grid", r.min_spectrum},
+                      {"max_zero_modulus", r.max_zero_modulus},
                       {"riccati_method", r.riccati_method},
                       {"riccati_iterations", r.riccati_iterations},
                       {"riccati_residual", r.riccati_residual}};

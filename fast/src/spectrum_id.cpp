@@ -666,6 +666,19 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
   g.D = Dhat;
   if (!g.B.allFinite() || !g.D.allFinite())
     throw Error(ErrorKind::Numerical, "step 9", "B or D is not finite");
+  // The stabilising solution makes Ĝ minimum phase: the zeros, eig(Â - B̂ D̂^{-1} Ĉ),
+  // lie inside the circle. If they do not, the Riccati equation had no stabilising
+  // solution -- the fitted spectrum is not positive on the whole circle, only on
+  // the grid -- and no spectral factor exists.
+  {
+    const Eigen::MatrixXd Z = Ahat - g.B * Dinv * Chat;
+    const double zmax = n > 0 ? Z.eigenvalues().cwiseAbs().maxCoeff() : 0.0;
+    res.max_zero_modulus = zmax;
+    if (!(zmax < 1.0))
+      throw Error(ErrorKind::Riccati, "step 9",
+                  "no stabilising solution: the spectral factor has a zero of modulus " + fmt(zmax, 12) +
+                      " (the estimated spectrum is not positive between the grid points)");
+  }
   return res;
 }
 

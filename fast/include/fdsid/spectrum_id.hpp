@@ -89,6 +89,7 @@ struct SpectrumResult {
   int riccati_iterations = 0;
   double riccati_residual = 0.0;  ///< ||P - Ric(P)||_F / ||P||_F
   double min_spectrum = 0.0;      ///< min over the grid of λ_min(Ŝ(z_k)) (step 8 fit)
+  double max_zero_modulus = 0.0;  ///< largest |zero| of Ĝ, eig(Â - B̂D̂^{-1}Ĉ): < 1 (minimum phase)
 };
 
 /// Akçay (2011) Algorithm 1, steps 1-10: minimum-phase spectral factor from
