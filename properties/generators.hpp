@@ -6,6 +6,7 @@
 /// RapidCheck generator draws and shrinks (smaller order, fewer channels,
 /// moduli and couplings towards simple values); the spec prints as the
 /// reproducer of a failing case.
+#include <algorithm>
 #include <cmath>
 #include <ostream>
 #include <vector>
@@ -13,6 +14,7 @@
 #include <Eigen/Dense>
 
 #include "fdsid/model.hpp"
+#include "fdsid/spectrum_id.hpp"
 
 namespace fdsid::testing {
 
@@ -105,6 +107,23 @@ inline bool meets_assumption_2_1(const StateSpace& sys, double rho_max = 0.95, d
     if (!(l(0) > gramian_min * l(l.size() - 1))) return false;
   }
   return true;
+}
+
+/// The M+1 noise-free samples of sys's spectrum on the uniform grid (Eq. 7, s̃ = 0).
+inline SpectrumData noise_free(const StateSpace& sys, int M) {
+  SpectrumData d;
+  d.m = sys.outputs();
+  d.M = M;
+  d.S = sample_spectrum(sys, M);
+  return d;
+}
+
+/// Largest distance from a pole of `truth` to the nearest pole of `estimate`.
+inline double pole_error(const StateSpace& truth, const StateSpace& estimate) {
+  const Eigen::VectorXcd a = poles(truth), b = poles(estimate);
+  double worst = 0;
+  for (Eigen::Index i = 0; i < a.size(); ++i) worst = std::max(worst, (b.array() - a(i)).abs().minCoeff());
+  return worst;
 }
 
 }  // namespace fdsid::testing

@@ -15,16 +15,10 @@ namespace fdsid {
 namespace {
 
 using testing::eigenvalue_condition;
+using testing::noise_free;
+using testing::pole_error;
 using testing::kU;
 using testing::spectrum_tolerance;
-
-SpectrumData noise_free(const StateSpace& sys, int M) {
-  SpectrumData d;
-  d.m = sys.outputs();
-  d.M = M;
-  d.S = sample_spectrum(sys, M);
-  return d;
-}
 
 // max_z ||Ŝ - S||_F / max_z ||S||_F over the grid points and the midpoints between them.
 double relative_spectrum_error(const StateSpace& truth, const StateSpace& estimate, int M, double* where = nullptr) {
@@ -41,14 +35,6 @@ double relative_spectrum_error(const StateSpace& truth, const StateSpace& estima
     scale = std::max(scale, S.norm());
   }
   return worst / scale;
-}
-
-// Largest distance from an eigenvalue of `truth` to the nearest of `estimate`.
-double pole_error(const StateSpace& truth, const StateSpace& estimate) {
-  const Eigen::VectorXcd a = poles(truth), b = poles(estimate);
-  double worst = 0;
-  for (Eigen::Index i = 0; i < a.size(); ++i) worst = std::max(worst, (b.array() - a(i)).abs().minCoeff());
-  return worst;
 }
 
 void expect_interpolation(const StateSpace& sys, int M, int order_option) {
