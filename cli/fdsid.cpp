@@ -12,8 +12,10 @@
 #include <vector>
 
 #include "fdsid/error.hpp"
+#include "fdsid/frf_id.hpp"
 #include "fdsid/io.hpp"
 #include "fdsid/paper.hpp"
+#include "fdsid/simulate.hpp"
 #include "fdsid/spectrum_id.hpp"
 #include "high_precision.hpp"
 
@@ -189,6 +191,217 @@ int run_sample_spectrum(const std::string& model_path, int M, double epsilon, st
   return 0;
 }
 
+struct FrfCommand {
+  std::string frf_path, data_path, meta_path;
+  std::string order = "auto", domain = "discrete", method = "bilinear", precision = "double";
+  std::string eiv_variance = "data";
+  int r = 0, r_max = 0;
+  double omega_scale = 0, min_input_snr = 10;
+  bool eiv = false, improper = false;
+};
+
+fdsid::Domain parse_domain(const std::string& s) {
+  if (s == "discrete") return fdsid::Domain::Discrete;
+  if (s == "continuous") return fdsid::Domain::Continuous;
+  throw fdsid::Error(fdsid::ErrorKind::Input, "--domain", "\"" + s + "\" is neither discrete nor continuous");
+}
+
+void print_poles(Out& out, const Eigen::VectorXcd& poles) {
+  out << "poles:";
+  for (Eigen::Index i = 0; i < poles.size(); ++i)
+    out << "  " << poles(i).real() << (poles(i).imag() < 0 ? "" : "+") << poles(i).imag() << "i";
+  out << "\n";
+}
+
+int run_identify_frf(const std::string& json_path, const FrfCommand& c) {
+  Out out{json_path == "-"};
+  const bool from_frf = !c.frf_path.empty();
+  if (from_frf == (!c.data_path.empty() || !c.meta_path.empty()))
+    throw fdsid::Error(fdsid::ErrorKind::Input, "identify-frf", "give either --frf FILE or --data FILE --meta FILE");
+  if (!from_frf && (c.data_path.empty() || c.meta_path.empty()))
+    throw fdsid::Error(fdsid::ErrorKind::Input, c.data_path.empty() ? "--data" : "--meta",
+                       "periodic records need both --data and --meta");
+  if (c.precision != "double" && c.precision != "high")
+    throw fdsid::Error(fdsid::ErrorKind::Input, "--precision", "\"" + c.precision + "\" is not double or high");
+  if (c.method != "bilinear" && c.method != "orthogonal")
+    throw fdsid::Error(fdsid::ErrorKind::Input, "--method", "\"" + c.method + "\" is not bilinear or orthogonal");
+  if (c.r < 0 || c.r_max < 0) throw fdsid::Error(fdsid::ErrorKind::Input, "--r", "must be positive");
+  if ((c.eiv || c.improper) && from_frf)
+    throw fdsid::Error(fdsid::ErrorKind::Input, c.eiv ? "--eiv" : "--improper",
+                       "needs periodic records (--data, --meta): the input noise is estimated over the periods");
+  if (c.eiv && c.improper)
+    throw fdsid::Error(fdsid::ErrorKind::Input, "--improper", "cannot be combined with --eiv (both use ratio data)");
+  if (c.eiv_variance != "data" && c.eiv_variance != "model")
+    throw fdsid::Error(fdsid::ErrorKind::Input, "--eiv-variance", "\"" + c.eiv_variance + "\" is not data or model");
+  const fdsid::Domain domain = parse_domain(c.domain);
+  fdsid::FrfOptions o;
+  o.order = parse_order(c.order);
+  o.r = c.r;
+  o.r_max = c.r_max;
+  o.continuous = c.method == "orthogonal" ? fdsid::ContinuousMethod::Orthogonal : fdsid::ContinuousMethod::Bilinear;
+  o.omega_scale = c.omega_scale;
+  const std::string where = from_frf ? c.frf_path : c.data_path;
+
+  fdsid::FrfData data;
+  json source;
+  int periods = 0, dropped = 0;
+  fdsid::SampleStatistics stats;
+  {
+    if (from_frf) {
+      data = fdsid::read_frf_csv(c.frf_path, domain);
+      source = {{"frf", c.frf_path}, {"variance", data.has_noise_model ? "G_var column (known)" : "none (unit weights)"}};
+    } else {
+      int inputs = 0;
+      const Eigen::MatrixXd samples = fdsid::read_records_csv(c.data_path, inputs);
+      const fdsid::RecordMeta meta = fdsid::read_meta(c.meta_path);
+      periods = meta.periods;
+      if (meta.periods < 4)
+        throw fdsid::Error(fdsid::ErrorKind::Input, c.meta_path + " field \"periods\"",
+                           "M = " + std::to_string(meta.periods) +
+                               " periods: the sample-subspace estimates of B and D need M >= 4, those of A and C "
+                               "M >= 2 (Pintelon 2002 Theorem 2)");
+      try {
+        stats = fdsid::record_statistics(samples, inputs, meta, domain);
+      } catch (const fdsid::Error& e) {
+        throw e.within(c.data_path + " with " + c.meta_path);
+      }
+      data = stats.data;
+      source = {{"data", c.data_path}, {"meta", c.meta_path}, {"periods", meta.periods},
+                {"variance", "sample variance over the periods / M (Pintelon 2002 Eq. 25)"}};
+    }
+  }
+  if (c.precision == "high") {
+    if (c.eiv || c.improper)
+      throw fdsid::Error(fdsid::ErrorKind::Input, "--precision", "high is not available with --eiv or --improper");
+    fdsid::cli::FrfHighRequest q;
+    q.frf_path = c.frf_path;
+    q.data_path = c.data_path;
+    q.meta_path = c.meta_path;
+    q.continuous = domain == fdsid::Domain::Continuous;
+    q.orthogonal = o.continuous == fdsid::ContinuousMethod::Orthogonal;
+    q.omega_scale = c.omega_scale;
+    q.order = o.order;
+    q.r = o.r;
+    std::string note;
+    if (q.order == 0 || q.r == 0) {
+      // The reference identifies for a given order and r; the automatic choices
+      // (Section 5) are made once, in double precision, and reported.
+      fdsid::FrfResult sel;
+      try {
+        sel = fdsid::identify_frf(data, o);
+      } catch (const fdsid::Error& e) {
+        throw e.within(where);
+      }
+      note = "order " + std::to_string(sel.order) + " and r " + std::to_string(sel.r) +
+             " chosen by the double-precision selection (singular values / V_SUB, Pintelon 2002 Section 5)";
+      q.order = sel.order;
+      q.r = sel.r;
+    }
+    return fdsid::cli::identify_frf_high(json_path, q, note);
+  }
+  std::string method = domain == fdsid::Domain::Discrete ? "pintelon2002-alg1"
+                                                         : std::string("pintelon2002-alg2-") + c.method;
+  fdsid::FrfResult res;
+  try {
+    if (c.eiv) {
+      // Section 5: Ĝ = Ŷ/Û with the corrected Eq. (31); with --eiv-variance
+      // model, a second pass evaluates the variance at the first-pass model.
+      data = fdsid::errors_in_variables(stats, nullptr, c.min_input_snr, &dropped);
+      res = fdsid::identify_frf(data, o);
+      if (c.eiv_variance == "model") {
+        data = fdsid::errors_in_variables(stats, &res.model, c.min_input_snr, &dropped);
+        fdsid::FrfOptions o2 = o;
+        o2.order = res.order;
+        o2.r = res.r;
+        res = fdsid::identify_frf(data, o2);
+      }
+      source["errors_in_variables"] = {
+          {"variance", c.eiv_variance == "model" ? "Eq. (31) at the first-pass model" : "Eq. (31), corrected (conj U)"},
+          {"dropped_lines", dropped}, {"min_input_snr", c.min_input_snr}};
+    } else if (c.improper) {
+      data = fdsid::swap_input_output(stats, c.min_input_snr, &dropped);
+      res = fdsid::identify_frf(data, o);
+      source["improper"] = {{"represents", "inverse: the model maps output to input (1/G)"}, {"dropped_lines", dropped}};
+    } else {
+      res = fdsid::identify_frf(data, o);
+    }
+  } catch (const fdsid::Error& e) {
+    throw e.within(where);
+  }
+  if (!from_frf && domain == fdsid::Domain::Discrete) res.model.sample_time = data.sample_time;
+  json j = fdsid::frf_result_to_json(res, method);
+  j["source"] = source;
+  if (c.improper) j["represents"] = "inverse";
+  out << "identified order " << res.order << (o.order == 0 ? " (read from the singular values)" : "") << " by "
+      << method << " from F = " << data.frequencies() << " frequencies"
+      << (periods > 0 ? ", M = " + std::to_string(periods) + " periods" : std::string()) << ", r = " << res.r
+      << (o.r == 0 ? " (minimising V_SUB)" : "") << "\n";
+  print_poles(out, res.poles);
+  out << "V_SUB = " << sci(res.v_sub) << " (Eq. 35; about F when model and noise model are right, F (M-1)/(M-2) with sample variances)\n";
+  if (c.improper) out << "the model is the inverse system 1/G (improper G, Pintelon 2002 Section 5)\n";
+  emit_json(json_path, j);
+  return 0;
+}
+
+int run_simulate_records(const std::string& model_path, fdsid::RecordOptions o, const std::string& out_path,
+                         const std::string& meta_path) {
+  if (out_path == meta_path) throw fdsid::Error(fdsid::ErrorKind::Input, "--meta-out", "must differ from --out");
+  const fdsid::StateSpace model = fdsid::read_model(model_path);
+  fdsid::RecordMeta meta;
+  const Eigen::MatrixXd rec = fdsid::simulate_periodic_record(model, o, meta);
+  std::ostringstream csv;
+  csv << "u,y\n";
+  char buf[80];
+  for (Eigen::Index i = 0; i < rec.rows(); ++i) {
+    std::snprintf(buf, sizeof buf, "%.17g,%.17g\n", rec(i, 0), rec(i, 1));
+    csv << buf;
+  }
+  json mj = {{"period", meta.period}, {"periods", meta.periods}, {"sample_time", meta.sample_time},
+             {"excited_lines", meta.excited_lines}};
+  fdsid::write_text_file(out_path, csv.str());
+  fdsid::write_text_file(meta_path, mj.dump(2) + "\n");
+  return 0;
+}
+
+int run_figure(const std::string& json_path, int figure, fdsid::FigureOptions o) {
+  Out out{json_path == "-"};
+  if (o.order == 0) o.order = figure == 1 ? 4 : 1;
+  const fdsid::FigureResult res = fdsid::reproduce_pintelon_figure(o);
+  const int F = static_cast<int>(res.frequency.size());
+  auto vec = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
+  json j = {{"figure", figure},
+            {"source", std::string("Pintelon (2002) Section 6.1, Fig. ") + (figure == 1 ? "1b" : "2b")},
+            {"frequency", vec(res.frequency)},
+            {"frequency_unit", "f/fs"},
+            {"ratio", vec(res.ratio)},
+            {"theory", vec(res.theory)},
+            {"bound", res.bound},
+            {"median_ratio", res.median_ratio},
+            {"runs", res.runs},
+            {"failures", res.failures},
+            {"M", o.M},
+            {"F", o.F},
+            {"r", o.r},
+            {"order", o.order},
+            {"input_level", o.input_level},
+            {"seed", o.seed},
+            {"std_subspace", vec(res.std_subspace)},
+            {"std_sample_subspace", vec(res.std_sample)},
+            {"std_known_alpha", vec(res.std_known_alpha)}};
+  std::vector<double> r(res.ratio.data(), res.ratio.data() + F);
+  std::sort(r.begin(), r.end());
+  out << "Pintelon (2002) Fig. " << figure << "b: std(G(theta_S)) / std(G(theta)), n_a = " << o.order << ", M = " << o.M
+      << ", F = " << o.F << ", r = " << o.r << ", |U| = " << o.input_level << ", " << res.runs << " runs ("
+      << res.failures << " failed)\n";
+  out << "ratio across frequency: min " << r.front() << ", median " << res.median_ratio << ", max " << r.back()
+      << "; bound sqrt((M-2)/(M-3)) = " << res.bound << "\n";
+  // Monte Carlo error of one ratio of standard deviations: each sample std
+  // has relative sd ≈ 1/sqrt(2 N_r); their ratio at most sqrt(2) times that.
+  out << "Monte Carlo standard error of one ratio <= " << std::sqrt(2.0) / std::sqrt(2.0 * res.runs) << "\n";
+  emit_json(json_path, j);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -211,6 +424,57 @@ int main(int argc, char** argv) {
   t2->add_option("--noise-variance", t2_noise, "unit-complex (E|v|^2 = 1, default) or unit-per-component (E|v|^2 = 2)");
   t2->add_option("--vo-epsilon", t2o.vo_epsilon, "noise level of the vo1997 runs (paper: 1e-9; 0 skips them)");
   t2->add_option("--M", t2o.Ms, "data lengths (default 1000 2000 4000 8000 16000 32000)");
+
+  fdsid::FigureOptions figo;
+  CLI::App* figs[2];
+  for (int f = 0; f < 2; ++f) {
+    figs[f] = reproduce->add_subcommand(f == 0 ? "fig1" : "fig2",
+                                        f == 0 ? "Pintelon (2002) Fig. 1: sample-subspace std ratio, no model errors"
+                                               : "Pintelon (2002) Fig. 2: std ratio with model errors (n_a = 1)");
+    figs[f]->add_option("--json", json_path, "write the JSON result here (- = stdout)");
+    figs[f]->add_option("--runs", figo.runs, "Monte Carlo runs N_r (paper: 10000)")->check(CLI::Range(2, 10000000));
+    figs[f]->add_option("--seed", figo.seed, "random seed");
+    figs[f]->add_option("--threads", figo.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
+    figs[f]->add_option("--input-level", figo.input_level,
+                        "|U(k)| (default 1; sqrt(2000)/2 = 22.36 is a unit sine under Eq. 4's DFT scaling)");
+    figs[f]->add_option("--M", figo.M, "experiments per run (paper: 7)")->check(CLI::Range(4, 10000));
+    figs[f]->add_option("--r", figo.r, "r of Algorithm 1 (paper: 8)")->check(CLI::Range(2, 200));
+    figs[f]->add_option("--F", figo.F, "frequencies k/2000, k = 1..F (paper: 999)")->check(CLI::Range(2, 999));
+  }
+  figo.order = 0;
+
+  auto* idf = app.add_subcommand("identify-frf", "subspace identification from FRF samples or periodic records (Pintelon 2002)");
+  FrfCommand frf;
+  idf->add_option("--frf", frf.frf_path, "FRF CSV: omega,G_re,G_im[,G_var]");
+  idf->add_option("--data", frf.data_path, "periodic input/output records CSV: u,y (or u1,...,y1,...)");
+  idf->add_option("--meta", frf.meta_path, "meta JSON of the records: period, periods, sample_time, excited_lines");
+  idf->add_option("--json", json_path, "write the identified model here (- = stdout)");
+  idf->add_option("--order", frf.order, "model order n_a, or auto (from the singular values of step 1c)");
+  idf->add_option("--r", frf.r, "r > n_a (default: minimise V_SUB, Eq. 35, over [1.5 n_a, 6 n_a])");
+  idf->add_option("--r-max", frf.r_max, "upper end of the r search (default 6 n_a)");
+  idf->add_option("--domain", frf.domain, "discrete (omega in rad/sample, default) or continuous (rad/s)");
+  idf->add_option("--method", frf.method, "continuous time: bilinear (Algorithm 2.1, default) or orthogonal (2.2)");
+  idf->add_option("--omega-scale", frf.omega_scale, "frequency scaling of Algorithm 2 (default sqrt(w_min w_max))");
+  idf->add_option("--precision", frf.precision, "double (default) or high");
+  idf->add_flag("--eiv", frf.eiv, "noisy input: identify from G = Y/U with the variance of Eq. (31) (Section 5)");
+  idf->add_option("--eiv-variance", frf.eiv_variance,
+                  "data (Eq. 31 from the noisy ratio) or model (re-evaluated at a first-pass model: consistent)");
+  idf->add_flag("--improper", frf.improper, "improper G: identify 1/G by swapping input and output (Section 5)");
+  idf->add_option("--min-input-snr", frf.min_input_snr, "drop lines whose input SNR is below this (default 10)");
+
+  auto* sim = app.add_subcommand("simulate-records", "periodic multisine experiment on a model: u,y CSV and meta JSON");
+  fdsid::RecordOptions rec;
+  std::string rec_out, rec_meta, rec_model;
+  sim->add_option("--model", rec_model, "discrete SISO model JSON")->required();
+  sim->add_option("--out", rec_out, "records CSV (u,y)")->required();
+  sim->add_option("--meta-out", rec_meta, "meta JSON")->required();
+  sim->add_option("--period", rec.period, "samples per period")->check(CLI::Range(4, 1 << 24));
+  sim->add_option("--periods", rec.periods, "periods M")->check(CLI::Range(1, 100000));
+  sim->add_option("--lines", rec.lines, "excited DFT lines (default: odd lines below P/4)");
+  sim->add_option("--rms", rec.rms, "input RMS (default 1)");
+  sim->add_option("--noise-std", rec.output_noise_std, "white output noise std (default 0)");
+  sim->add_option("--input-noise-std", rec.input_noise_std, "white input measurement noise std (default 0)");
+  sim->add_option("--seed", rec.seed, "random seed");
 
   auto* ids = app.add_subcommand("identify-spectrum", "spectral factor from power-spectrum samples");
   std::string data_path, model_path, order = "auto", method = "akcay2011", precision = "double", extension = "hermitian-part";
@@ -246,8 +510,9 @@ int main(int argc, char** argv) {
 
   // CLI11 reports an unknown subcommand as "A subcommand is required"; name it.
   {
-    const std::vector<std::string> top = {"reproduce", "identify-spectrum", "check", "sample-spectrum"};
-    const std::vector<std::string> targets = {"table1", "table2"};
+    const std::vector<std::string> top = {"reproduce", "identify-spectrum", "identify-frf", "check",
+                                          "sample-spectrum", "simulate-records"};
+    const std::vector<std::string> targets = {"table1", "table2", "fig1", "fig2"};
     auto unknown = [](const std::string& word, const std::vector<std::string>& known) {
       return !word.empty() && word[0] != '-' && std::find(known.begin(), known.end(), word) == known.end();
     };
@@ -256,7 +521,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     if (argc > 2 && std::string(argv[1]) == "reproduce" && unknown(argv[2], targets)) {
-      std::cerr << "fdsid: reproduce: unknown target \"" << argv[2] << "\" (expected table1 or table2)\n";
+      std::cerr << "fdsid: reproduce: unknown target \"" << argv[2] << "\" (expected table1, table2, fig1 or fig2)\n";
       return 2;
     }
   }
@@ -272,10 +537,18 @@ int main(int argc, char** argv) {
   }
 
   try {
-    for (const CLI::App* sub : {t1, t2, ids, chk})
+    for (const CLI::App* sub : {t1, t2, ids, chk, idf, figs[0], figs[1]})
       if (sub->parsed() && sub->count("--json") > 0 && json_path.empty())
         throw fdsid::Error(fdsid::ErrorKind::Input, "--json", "empty path (use - for stdout)");
     if (t1->parsed()) return run_table1(json_path);
+    if (figs[0]->parsed()) return run_figure(json_path, 1, figo);
+    if (figs[1]->parsed()) return run_figure(json_path, 2, figo);
+    if (idf->parsed()) return run_identify_frf(json_path, frf);
+    if (sim->parsed()) {
+      if (static_cast<long long>(rec.period) * rec.periods > 100000000LL)
+        throw fdsid::Error(fdsid::ErrorKind::Input, "--period", "period x periods above 1e8 samples");
+      return run_simulate_records(rec_model, rec, rec_out, rec_meta);
+    }
     if (t2->parsed()) {
       t2o.extension = parse_extension(t2_ext);
       if (t2_noise == "unit-complex") t2o.noise = fdsid::NoiseVariance::UnitComplex;

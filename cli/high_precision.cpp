@@ -8,6 +8,8 @@
 #include "fdsid/compare.hpp"
 #include "fdsid/error.hpp"
 #include "fdsid/io.hpp"
+#include "fdsid/frf_id.hpp"
+#include "fdsid/reference/frf_id.hpp"
 #include "fdsid/reference/io.hpp"
 #include "fdsid/reference/spectrum_id.hpp"
 #include "fdsid/spectrum_id.hpp"
@@ -153,6 +155,91 @@ int sample_spectrum_high(const std::string& model_path, int M, const std::string
   } catch (const reference::Error& e) {
     throw Error(ErrorKind::Input, model_path, e.what());
   }
+  return 0;
+}
+
+int identify_frf_high(const std::string& json_path, const FrfHighRequest& q, const std::string& note) {
+  const std::string domain = q.continuous ? "continuous" : "discrete";
+  const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
+  reference::FrfResult res;
+  reference::Real sample_time = 1;
+  try {
+    reference::FrfData data;
+    if (!q.frf_path.empty()) {
+      data = reference::read_frf_csv(q.frf_path, domain);
+    } else {
+      int inputs = 0;
+      const Eigen::MatrixXd samples = read_records_csv(q.data_path, inputs);
+      const RecordMeta meta = read_meta(q.meta_path);
+      std::vector<std::vector<reference::Real>> channels(samples.cols());
+      char buf[40];
+      for (Eigen::Index c = 0; c < samples.cols(); ++c)
+        for (Eigen::Index t = 0; t < samples.rows(); ++t) {
+          std::snprintf(buf, sizeof buf, "%.17g", samples(t, c));  // the double's exact value
+          channels[c].push_back(reference::parse_decimal(buf));
+        }
+      const auto spectra = reference::period_spectra(channels, meta.period, meta.periods, meta.excited_lines);
+      std::vector<std::vector<reference::MatrixC>> U_l(meta.periods), Y_l(meta.periods);
+      const Eigen::Index outputs = samples.cols() - inputs;
+      for (int l = 0; l < meta.periods; ++l)
+        for (size_t k = 0; k < meta.excited_lines.size(); ++k) {
+          U_l[l].push_back(spectra[l][k].topRows(inputs));
+          Y_l[l].push_back(spectra[l][k].bottomRows(outputs));
+        }
+      sample_time = reference::parse_decimal([&] {
+        std::snprintf(buf, sizeof buf, "%.17g", meta.sample_time);
+        return std::string(buf);
+      }());
+      std::vector<reference::Real> omega;
+      const reference::Real two_pi = boost::multiprecision::atan(reference::Real(1)) * 8;
+      for (int k : meta.excited_lines)
+        omega.push_back(two_pi * k / meta.period / (q.continuous ? sample_time : reference::Real(1)));
+      data = reference::sample_statistics(domain, omega, U_l, Y_l).data;
+    }
+    reference::FrfOptions o;
+    o.order = q.order;
+    o.r = q.r;
+    o.continuous_method = q.orthogonal ? "orthogonal" : "bilinear";
+    if (q.omega_scale > 0) {
+      char buf[40];
+      std::snprintf(buf, sizeof buf, "%.17g", q.omega_scale);
+      o.omega_scale = reference::parse_decimal(buf);
+    }
+    res = reference::identify_frf(data, o);
+  } catch (const reference::StepError& e) {
+    throw Error(ErrorKind::Numerical, where, std::string("reference: ") + e.what());
+  } catch (const reference::Error& e) {
+    throw Error(ErrorKind::Input, where, e.what());
+  }
+  if (!q.data_path.empty() && !q.continuous) res.model.sample_time = sample_time;
+  json j = reference::model_to_json(res.model, 40);
+  j["order"] = res.order;
+  j["r"] = res.r;
+  j["method"] = q.continuous ? std::string("pintelon2002-alg2-") + (q.orthogonal ? "orthogonal" : "bilinear")
+                             : std::string("pintelon2002-alg1");
+  json sv = json::array();
+  for (const auto& s : res.singular_values) sv.push_back(reference::to_decimal(s, 40));
+  j["singular_values"] = sv;
+  json poles = json::array();
+  for (const auto& z : res.poles) poles.push_back({reference::to_decimal(z.real(), 40), reference::to_decimal(z.imag(), 40)});
+  j["poles"] = poles;
+  j["v_sub"] = reference::to_decimal(res.v_sub, 40);
+  j["data"] = where;
+  j["precision"] = "high (50-digit binary floating point, Boost.Multiprecision cpp_bin_float<50>)";
+  if (!note.empty()) j["note"] = note;
+  if (json_path != "-") {
+    std::cout << "identified order " << res.order << " in high precision, r = " << res.r << ", V_SUB = "
+              << reference::to_decimal(res.v_sub, 6) << "\npoles:";
+    for (const auto& z : j["poles"]) {
+      char buf[96];
+      std::snprintf(buf, sizeof buf, "  %.15g%+.15gi", to_double(z[0]), to_double(z[1]));
+      std::cout << buf;
+    }
+    std::cout << "\n";
+    if (!note.empty()) std::cout << note << "\n";
+    std::cout << "(the JSON has 40 significant digits)\n";
+  }
+  if (!json_path.empty()) write_text_file(json_path, j.dump(2) + "\n");
   return 0;
 }
 

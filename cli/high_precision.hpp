@@ -25,4 +25,21 @@ int check(const std::string& json_path, const std::string& model_path, const std
 /// entries in 50 digits, written with 40 significant digits.
 int sample_spectrum_high(const std::string& model_path, int M, const std::string& out_path);
 
+/// What identify-frf hands to the reference: the file(s), the order and r
+/// (chosen by the double-precision selection when the user gave none).
+struct FrfHighRequest {
+  std::string frf_path;              ///< FRF CSV, or empty
+  std::string data_path, meta_path;  ///< periodic records + meta, or empty
+  bool continuous = false;
+  bool orthogonal = false;
+  double omega_scale = 0;
+  int order = 0, r = 0;
+};
+
+/// `identify-frf --precision high`: Pintelon (2002) Algorithm 1/2 in 50
+/// digits (reference/frf_id). FRF files are parsed exactly from their decimal
+/// text; periodic records go through the reference's direct DFT (Eq. 4) from
+/// the double values of the samples. JSON numbers are 40-digit strings.
+int identify_frf_high(const std::string& json_path, const FrfHighRequest& request, const std::string& note);
+
 }  // namespace fdsid::cli

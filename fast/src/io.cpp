@@ -256,6 +256,165 @@ void write_spectrum_csv(std::ostream& out, const SpectrumData& d) {
   }
 }
 
+FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain) {
+  std::string line;
+  if (!std::getline(in, line)) input_error(name, "empty file (expected a header omega,G_re,G_im[,G_var])");
+  const auto header = split_csv(line);
+  const bool has_var = header.size() == 4;
+  if (!(header.size() == 3 || has_var) || header[0] != "omega" || header[1] != "G_re" || header[2] != "G_im" ||
+      (has_var && header[3] != "G_var"))
+    input_error(name + " line 1", "header must be omega,G_re,G_im or omega,G_re,G_im,G_var");
+  std::vector<double> omega;
+  std::vector<Eigen::MatrixXcd> G;
+  std::vector<Eigen::MatrixXd> var;
+  int lineno = 1;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty() || line == "\r") continue;
+    const auto cells = split_csv(line);
+    const std::string where = name + " line " + std::to_string(lineno);
+    if (cells.size() != header.size())
+      input_error(where, "has " + std::to_string(cells.size()) + " fields, the header has " +
+                             std::to_string(header.size()));
+    omega.push_back(parse_cell(cells[0], where + " column omega"));
+    G.push_back(Eigen::MatrixXcd::Constant(
+        1, 1, cplx(parse_cell(cells[1], where + " column G_re"), parse_cell(cells[2], where + " column G_im"))));
+    if (has_var) {
+      const double v = parse_cell(cells[3], where + " column G_var");
+      if (!(v > 0)) input_error(where + " column G_var", "variance " + cells[3] + " must be positive");
+      var.push_back(Eigen::MatrixXd::Constant(1, 1, v));
+    }
+  }
+  if (omega.empty()) input_error(name, "no data rows");
+  FrfData d = frf_data(domain, Eigen::Map<Eigen::VectorXd>(omega.data(), static_cast<Eigen::Index>(omega.size())), G,
+                       var);
+  validate(d, name + " (data row k is file line k + 1)");
+  return d;
+}
+
+FrfData read_frf_csv(const std::string& path, Domain domain) {
+  check_readable_file(path, "FRF file");
+  std::ifstream f(path);
+  if (!f) input_error(path, "cannot open FRF file");
+  return parse_frf_csv(f, path, domain);
+}
+
+Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int& inputs) {
+  std::string line;
+  if (!std::getline(in, line)) input_error(name, "empty file (expected a header u,y or u1,...,y1,...)");
+  const auto header = split_csv(line);
+  inputs = 0;
+  int outputs = 0;
+  for (size_t c = 0; c < header.size(); ++c) {
+    const std::string& h = header[c];
+    const bool is_u = !h.empty() && h[0] == 'u', is_y = !h.empty() && h[0] == 'y';
+    const std::string rest = h.empty() ? "" : h.substr(1);
+    const bool index_ok = rest.empty() || rest.find_first_not_of("0123456789") == std::string::npos;
+    if (!(is_u || is_y) || !index_ok)
+      input_error(name + " line 1", "column " + std::to_string(c + 1) + " \"" + h +
+                                        "\" is not u, y, u<k> or y<k> (header u,y or u1,...,y1,...)");
+    if (is_u) {
+      if (outputs > 0) input_error(name + " line 1", "input columns must come before output columns");
+      ++inputs;
+    } else {
+      ++outputs;
+    }
+  }
+  if (inputs < 1 || outputs < 1) input_error(name + " line 1", "needs at least one u and one y column");
+  const size_t cols = header.size();
+  std::vector<double> values;
+  int lineno = 1;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty() || line == "\r") continue;
+    const auto cells = split_csv(line);
+    const std::string where = name + " line " + std::to_string(lineno);
+    if (cells.size() != cols)
+      input_error(where, "has " + std::to_string(cells.size()) + " fields, the header has " + std::to_string(cols));
+    for (size_t c = 0; c < cols; ++c) values.push_back(parse_cell(cells[c], where + " column " + header[c]));
+  }
+  const Eigen::Index rows = static_cast<Eigen::Index>(values.size() / cols);
+  if (rows == 0) input_error(name, "no samples");
+  return Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      values.data(), rows, static_cast<Eigen::Index>(cols));
+}
+
+Eigen::MatrixXd read_records_csv(const std::string& path, int& inputs) {
+  check_readable_file(path, "data file");
+  std::ifstream f(path);
+  if (!f) input_error(path, "cannot open data file");
+  return parse_records_csv(f, path, inputs);
+}
+
+namespace {
+int int_field(const nlohmann::json& j, const std::string& key, const std::string& where) {
+  if (!j.contains(key)) input_error(where + " field \"" + key + "\"", "is missing");
+  const auto& v = j.at(key);
+  if (!v.is_number_integer() && !(v.is_number() && std::floor(v.get<double>()) == v.get<double>()))
+    input_error(where + " field \"" + key + "\"", "must be an integer");
+  const double x = v.get<double>();
+  if (std::abs(x) > 2e9) input_error(where + " field \"" + key + "\"", "is out of range");
+  return static_cast<int>(x);
+}
+}  // namespace
+
+RecordMeta meta_from_json(const nlohmann::json& j, const std::string& where) {
+  if (!j.is_object()) input_error(where, "expected a JSON object");
+  RecordMeta m;
+  m.period = int_field(j, "period", where);
+  m.periods = int_field(j, "periods", where);
+  m.sample_time = j.contains("sample_time") ? number_from_json(j["sample_time"], where + " field \"sample_time\"") : 1.0;
+  if (m.period < 2) input_error(where + " field \"period\"", "must be at least 2, got " + std::to_string(m.period));
+  if (m.periods < 1) input_error(where + " field \"periods\"", "must be at least 1, got " + std::to_string(m.periods));
+  if (!(m.sample_time > 0)) input_error(where + " field \"sample_time\"", "must be positive");
+  if (!j.contains("excited_lines") || !j["excited_lines"].is_array())
+    input_error(where + " field \"excited_lines\"", "must be an array of DFT line indices");
+  for (size_t i = 0; i < j["excited_lines"].size(); ++i) {
+    const auto& v = j["excited_lines"][i];
+    const std::string w = where + " field \"excited_lines\"[" + std::to_string(i) + "]";
+    if (!v.is_number() || std::floor(v.get<double>()) != v.get<double>()) input_error(w, "must be an integer");
+    const double k = v.get<double>();
+    if (k < 1 || k > m.period / 2)
+      input_error(w, "line " + std::to_string(static_cast<long long>(k)) + " is outside 1 ... P/2 = " +
+                         std::to_string(m.period / 2));
+    m.excited_lines.push_back(static_cast<int>(k));
+  }
+  if (m.excited_lines.empty()) input_error(where + " field \"excited_lines\"", "no excited lines");
+  return m;
+}
+
+RecordMeta read_meta(const std::string& path) {
+  check_readable_file(path, "meta file");
+  std::ifstream f(path);
+  if (!f) input_error(path, "cannot open meta file");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(f);
+  } catch (const nlohmann::json::parse_error& e) {
+    input_error(path, std::string("malformed JSON: ") + e.what());
+  }
+  return meta_from_json(j, path);
+}
+
+nlohmann::json frf_result_to_json(const FrfResult& r, const std::string& method) {
+  nlohmann::json j = model_to_json(r.model);
+  j["order"] = r.order;
+  j["method"] = method;
+  j["r"] = r.r;
+  j["singular_values"] =
+      std::vector<double>(r.singular_values.data(), r.singular_values.data() + r.singular_values.size());
+  j["singular_values_of"] = "C_Y^{-1/2} R22^T (Pintelon 2002 step 1c), r = " + std::to_string(r.order_r);
+  nlohmann::json poles = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < r.poles.size(); ++i) poles.push_back({r.poles(i).real(), r.poles(i).imag()});
+  j["poles"] = poles;
+  j["v_sub"] = r.v_sub;
+  nlohmann::json scan = nlohmann::json::array();
+  for (const auto& [rr, v] : r.r_scan) scan.push_back({{"r", rr}, {"v_sub", v}});
+  j["r_scan"] = scan;
+  j["diagnostics"] = {{"condition", r.condition}, {"error_estimate", r.error_estimate}, {"noise_edge", r.noise_edge}};
+  return j;
+}
+
 void write_text_file(const std::string& path, const std::string& text) {
   if (path == "-") {
     std::cout << text;

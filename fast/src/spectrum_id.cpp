@@ -12,8 +12,14 @@
 #include <sstream>
 
 #include "fdsid/error.hpp"
+#include "fftw_lock.hpp"
 
 namespace fdsid {
+
+std::mutex& detail::fftw_planner_mutex() {
+  static std::mutex m;
+  return m;
+}
 
 namespace {
 
@@ -26,12 +32,7 @@ std::string fmt(double x, int digits = 4) {
   return s.str();
 }
 
-// FFTW's planner is not thread-safe (fftw_execute is): plans are made and
-// destroyed under this lock so that Monte Carlo realisations may run in threads.
-std::mutex& fftw_planner_mutex() {
-  static std::mutex m;
-  return m;
-}
+using detail::fftw_planner_mutex;
 
 struct FftwFree;
 

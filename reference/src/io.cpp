@@ -1,4 +1,5 @@
-// Model JSON and power-spectrum CSV (shared/CONTRACTS.md) in high precision.
+// Model JSON, power-spectrum CSV and frequency-response CSV (shared/CONTRACTS.md)
+// in high precision.
 // No Eigen decomposition is instantiated here (see spectrum_id.cpp).
 #include "fdsid/reference/io.hpp"
 
@@ -323,6 +324,56 @@ void write_spectrum_csv(const Spectrum& spectrum, const std::string& path, int d
     out << '\n';
   }
   if (!out) throw InputError(path + ": write failed");
+}
+
+FrfData read_frf_csv(const std::string& path, const std::string& domain) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open");
+  auto fail = [&](int line, const std::string& what) {
+    throw InputError(path + ":" + std::to_string(line) + ": " + what);
+  };
+  if (domain != "discrete" && domain != "continuous")
+    throw InputError(path + ": domain \"" + domain + "\" is neither discrete nor continuous");
+  std::string line;
+  int line_number = 0;
+  std::vector<std::string> header;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (!trim(line).empty()) {
+      header = split_csv(trim(line));
+      break;
+    }
+  }
+  const std::vector<std::string> plain = {"omega", "G_re", "G_im"};
+  const std::vector<std::string> with_var = {"omega", "G_re", "G_im", "G_var"};
+  if (header != plain && header != with_var)
+    fail(line_number, "header must be omega,G_re,G_im or omega,G_re,G_im,G_var");
+  const std::size_t cols = header.size();
+  FrfData data;
+  data.domain = domain;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (trim(line).empty()) continue;
+    const std::vector<std::string> cells = split_csv(trim(line));
+    if (cells.size() != cols)
+      fail(line_number, std::to_string(cells.size()) + " cells, header has " + std::to_string(cols));
+    std::vector<Real> values(cols);
+    for (std::size_t c = 0; c < cols; ++c) {
+      try {
+        values[c] = parse_decimal(cells[c]);
+      } catch (const InputError& e) {
+        fail(line_number, "column " + header[c] + ": " + e.what());
+      }
+    }
+    const Real variance = cols == 4 ? values[3] : Real(1);
+    if (!(variance > 0)) fail(line_number, "G_var = " + cells[3] + " is not > 0");
+    data.omega.push_back(values[0]);
+    data.U.push_back(MatrixC::Constant(1, 1, Complex(1)));
+    data.Y.push_back(MatrixC::Constant(1, 1, Complex(values[1], values[2])));
+    data.variance.push_back(MatrixR::Constant(1, 1, variance));
+  }
+  if (data.omega.empty()) fail(line_number, "no samples");
+  return data;
 }
 
 }  // namespace fdsid::reference

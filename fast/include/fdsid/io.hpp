@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "fdsid/frf_id.hpp"
 #include "fdsid/model.hpp"
 #include "fdsid/spectrum_id.hpp"
 
@@ -28,6 +29,27 @@ nlohmann::json result_to_json(const SpectrumResult& result);
 SpectrumData read_spectrum_csv(const std::string& path);
 SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name);
 void write_spectrum_csv(std::ostream& out, const SpectrumData& data);
+
+/// Frequency-response CSV: header omega,G_re,G_im with an optional G_var
+/// column (variance of each complex sample, > 0). omega in rad/sample
+/// (discrete) or rad/s (continuous); validated by validate(FrfData). Without
+/// G_var every sample gets weight 1 and has_noise_model is false.
+FrfData read_frf_csv(const std::string& path, Domain domain);
+FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain);
+
+/// Periodic input/output records CSV: header u,y or u1,…,uq,y1,…,yp (inputs
+/// first), one row per sample. Returns the samples (rows × (q + p)) and sets
+/// `inputs` = q.
+Eigen::MatrixXd read_records_csv(const std::string& path, int& inputs);
+Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int& inputs);
+
+/// Meta JSON: {"period": P, "periods": M, "sample_time": Ts, "excited_lines": [k, …]}.
+RecordMeta read_meta(const std::string& path);
+RecordMeta meta_from_json(const nlohmann::json& j, const std::string& where);
+
+/// Identified-model JSON of identify-frf: the model plus order, method, r,
+/// singular values (those the order was read from), poles, V_SUB and the r scan.
+nlohmann::json frf_result_to_json(const FrfResult& result, const std::string& method);
 
 /// Writes text to path atomically (temporary file in the same folder, then
 /// rename), or to stdout when path is "-".

@@ -2,6 +2,7 @@
 // power-spectrum CSV, every number parsed from its decimal text.
 #pragma once
 
+#include "fdsid/reference/frf_id.hpp"
 #include "fdsid/reference/spectrum_id.hpp"
 
 #include <nlohmann/json.hpp>
@@ -55,5 +56,14 @@ Spectrum read_spectrum_csv(const std::string& path);
 /// significant digits. Throws InputError if the file cannot be written.
 void write_spectrum_csv(const Spectrum& spectrum, const std::string& path,
                         int digits = 40);
+
+/// Reads the frequency-response CSV of the contracts: header `omega,G_re,G_im`
+/// or `omega,G_re,G_im,G_var`, one row per ω_k, every cell parsed exactly
+/// (parse_decimal). Returns FRF data for Pintelon (2002): U[k] = 1, Y[k] = G_k,
+/// variance[k] = G_var (1 for every sample when the column is absent), in the
+/// given domain ("discrete": rad/sample, "continuous": rad/s). Ranges and
+/// distinctness of ω are checked by identify_frf. Throws InputError
+/// "<path>:<line>: …" on a malformed header, line or cell, or G_var ≤ 0.
+FrfData read_frf_csv(const std::string& path, const std::string& domain = "discrete");
 
 }  // namespace fdsid::reference

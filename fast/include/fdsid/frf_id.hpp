@@ -1,0 +1,210 @@
+#pragma once
+/// Frequency-domain subspace identification from FRF samples and periodic
+/// input/output data: Pintelon (2002), Algorithms 1 and 2 (Section 3.1), the
+/// sample-subspace variant (Section 4.1), errors-in-variables and improper
+/// models (Section 5), and the choice of r by V_SUB (Eq. 35).
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "fdsid/model.hpp"
+
+namespace fdsid {
+
+/// Frequency-domain data at F distinct frequencies (Pintelon 2002, Eqs. 3, 15).
+/// Each frequency k carries c "columns" (the same c for all k): column j is one
+/// input/output pair U[k].col(j) ∈ C^m, Y[k].col(j) ∈ C^p with the variance of
+/// each output entry (circular complex noise, independent entries).
+/// Periodic input/output data: c = 1. FRF data: U[k] = I_m, Y[k] = G(ξ_k), c = m.
+struct FrfData {
+  Domain domain = Domain::Discrete;
+  /// Carried into the identified model. Discrete: ω is in rad/sample whatever
+  /// the sample time; continuous: ω is in rad/s.
+  double sample_time = 1.0;
+  Eigen::VectorXd omega;                ///< F distinct frequencies
+  std::vector<Eigen::MatrixXcd> U;      ///< F matrices m × c
+  std::vector<Eigen::MatrixXcd> Y;      ///< F matrices p × c
+  std::vector<Eigen::MatrixXd> variance;///< F matrices p × c: σ²_Y of each entry of Y, > 0
+  /// Whether `variance` is a noise model (known or sample variance) rather than
+  /// a placeholder weight of 1 (FRF files without a G_var column). Only the
+  /// automatic order selection reads it.
+  bool has_noise_model = true;
+
+  int frequencies() const { return static_cast<int>(omega.size()); }
+  int inputs() const { return U.empty() ? 0 : static_cast<int>(U[0].rows()); }
+  int outputs() const { return Y.empty() ? 0 : static_cast<int>(Y[0].rows()); }
+  int columns() const { return U.empty() ? 0 : static_cast<int>(U[0].cols()); }
+};
+
+/// FRF data G(ξ_k) (p × m each) with the variance of each entry: U[k] = I_m.
+/// An empty `variance` means unit weights (has_noise_model = false).
+FrfData frf_data(Domain domain, const Eigen::VectorXd& omega, const std::vector<Eigen::MatrixXcd>& G,
+                 const std::vector<Eigen::MatrixXd>& variance = {});
+
+/// Checks shapes, finiteness, positive variances, distinct frequencies in range
+/// (discrete: 0 ≤ ω ≤ π; continuous: ω > 0). Throws Error(Input) or Error(Grid)
+/// naming the frequency index and the number.
+void validate(const FrfData& data, const std::string& where = "data");
+
+/// Algorithm 2's two continuous-time variants (Section 3.1).
+enum class ContinuousMethod {
+  Bilinear,   ///< 2.1: ξ = w = (s/ω_s − 1)/(s/ω_s + 1), then the bilinear state-space back-transformation
+  Orthogonal  ///< 2.2: ξ = s/ω_s with two orthonormal polynomial bases (Forsythe/Arnoldi) and the generalised shift
+};
+const char* to_string(ContinuousMethod m);
+
+struct FrfOptions {
+  int order = 0;  ///< n_a; 0 reads it from the singular values of step 1c
+  int r = 0;      ///< r > n_a; 0 chooses it by minimising V_SUB (Eq. 35) over [r_min, r_max]
+  int r_min = 0;  ///< 0: max(n_a + 1, ⌈1.5 n_a⌉)   (Section 5)
+  int r_max = 0;  ///< 0: max(r_min, 6 n_a)         (Section 5; larger when asked)
+  int max_order = 0;  ///< largest order the automatic selection considers; 0: min(20, r p − 1)
+  ContinuousMethod continuous = ContinuousMethod::Bilinear;
+  double omega_scale = 0;  ///< ω_s of Algorithm 2; 0: √(ω_min ω_max)
+};
+
+struct FrfResult {
+  StateSpace model;
+  int order = 0;
+  int r = 0;
+  /// Singular values of C_Y^{-1/2} R22ᵀ (step 1c), all r p of them, largest first.
+  Eigen::VectorXd singular_values;
+  /// The r used to read the order (automatic order) — equals r otherwise.
+  int order_r = 0;
+  double v_sub = 0;  ///< Eq. (35) at the estimate
+  /// V_SUB for every r tried (empty when r was given).
+  std::vector<std::pair<int, double>> r_scan;
+  Eigen::VectorXcd poles;
+  /// κ = (σ_1/σ_n of step 1c) · cond(Ô_r[1:r−1]) of step 2: the first-order
+  /// amplification of rounding errors into Â.
+  double condition = 0;
+  /// u · κ: the relative accuracy of Â (and the poles) that double precision
+  /// can promise on noise-free data. Tests and `check` scale tolerances by it.
+  double error_estimate = 0;
+  /// Noise level of step 1c's squared singular values (Marchenko–Pastur edge of
+  /// whitened noise) used by the automatic order selection; 0 when unused.
+  double noise_edge = 0;
+};
+
+/// Pintelon (2002) Algorithm 1 (discrete time) or Algorithm 2 (continuous time)
+/// for fixed n_a and r, p outputs, m inputs, c columns per frequency.
+///
+/// Method: step 1a builds the real data matrix Z = [𝐔^re; 𝐘^re] (Eqs. 9, 11,
+/// 18) one frequency at a time and never stores it: step 1b is a chunked
+/// Householder QR (TSQR) of Zᵀ — R of [R; next rows] — split over threads and
+/// merged, which keeps memory at O(r² (m+p)²) and gives the same R as a dense
+/// QR up to row signs. C_Y = Σ Re((W_r W_rᴴ) ⊗ diag σ²) (the meaning of the
+/// garbled line in Eq. 18) is factored once, C_Y = L Lᵀ, and both square roots
+/// of step 1c come from L. Step 2: Eq. (19) by a least-squares solve
+/// (generalised shift for the orthogonal bases). Step 3: Eq. (17) with
+/// W = 1/σ, a real linear least-squares problem in (B, D) (real and imaginary
+/// parts stacked).
+/// Numerical aspects: O(F c r² (m+p)²) flops for step 1, O(F c n³) for step 3.
+/// Fails with Error(Dimension) when 2 F c < r (m + p) or r ≤ n_a, with
+/// Error(Numerical) when 𝐔^re is rank deficient (input not persistently
+/// exciting, Assumption 3) or I − A_w is singular in the back-transformation.
+/// References: Pintelon, Automatica 38 (2002) 1295–1311; McKelvey, Akçay &
+/// Ljung, IEEE TAC 41 (1996); Verhaegen (1994); Yang & Sanada (2000).
+FrfResult identify_frf_fixed(const FrfData& data, int order, int r,
+                             ContinuousMethod continuous = ContinuousMethod::Bilinear, double omega_scale = 0);
+
+/// Identification with the choices of Section 5: the order from the singular
+/// values of step 1c (when options.order == 0) and r minimising V_SUB (Eq. 35)
+/// over [1.5 n_a, 6 n_a] (when options.r == 0). The order rule: with a noise
+/// model, whitened noise gives squared singular values ≈ 1 (C_Y is the
+/// covariance of 𝐍^re), so n_a counts those above (1 + √(r p / (2 F c)))²
+/// (the Marchenko–Pastur edge) times 2; without one, the largest ratio
+/// σ_n / σ_{n+1}.
+FrfResult identify_frf(const FrfData& data, const FrfOptions& options = {});
+
+/// Step 1 only: the singular values of C_Y^{-1/2} R22ᵀ for a given r.
+Eigen::VectorXd frf_singular_values(const FrfData& data, int r,
+                                    ContinuousMethod continuous = ContinuousMethod::Bilinear,
+                                    double omega_scale = 0);
+
+/// Step 3 alone (Eq. 17 with W = 1/σ): B and D for given A and C, with
+/// ξ = e^{jω} (discrete) or ξ = jω (continuous; A in rad/s). Used for the
+/// paper's "α known" estimate β̂(α₀) (Section 6.1) and by the gap diagnosis.
+StateSpace fit_input_matrices(const FrfData& data, const Eigen::MatrixXd& A, const Eigen::MatrixXd& C);
+
+/// G at frequency ω: z = e^{jω} (discrete, ω in rad/sample) or s = jω (continuous).
+Eigen::MatrixXcd frequency_response(const StateSpace& model, double omega);
+
+/// G at many frequencies at once: C(ξI − A)⁻¹ by the eigenvectors of A when
+/// their basis is well conditioned (κ₁(V) ≤ 100, error ≤ κ u relative to a
+/// backward-stable solve), else by one LU per frequency. A frequency on a
+/// pole gives Inf entries.
+std::vector<Eigen::MatrixXcd> frequency_response(const StateSpace& model, const Eigen::VectorXd& omega);
+
+/// Eq. (35): Σ_k Σ_j Σ_i |Y − G U|²_i / σ²_i over all frequencies and columns.
+double v_sub(const StateSpace& model, const FrfData& data);
+
+/// Bilinear back-transformation of Algorithm 2.1: (A_w, B_w, C_w, D_w) in
+/// w = (s/ω_s − 1)/(s/ω_s + 1) to (A, B, C, D) in s:
+/// A = ω_s (I − A_w)⁻¹(I + A_w), B = √2 ω_s (I − A_w)⁻¹ B_w,
+/// C = √2 C_w (I − A_w)⁻¹, D = D_w + C_w (I − A_w)⁻¹ B_w.
+/// Derivation: wI − A_w = [s̃(I − A_w) − (I + A_w)]/(s̃ + 1) and
+/// (s̃ + 1)(s̃I − A_c)⁻¹ = I + (I + A_c)(s̃I − A_c)⁻¹ with I + A_c = 2(I − A_w)⁻¹.
+/// Throws Error(Numerical) when I − A_w is singular (a pole at s = ∞).
+StateSpace bilinear_to_continuous(const StateSpace& w_model, double omega_scale);
+
+// ---------------------------------------------------------------------------
+// Periodic records and sample statistics (Section 4.1, Section 5)
+
+/// Meta data of a periodic record (CONTRACTS.md).
+struct RecordMeta {
+  int period = 0;      ///< P samples per period
+  int periods = 0;     ///< M
+  double sample_time = 1.0;
+  std::vector<int> excited_lines;  ///< DFT lines 1 … P/2 driven by the excitation
+};
+
+/// Eq. (4): DFT Z(k) = (1/√P) Σ_t z(t) e^{−j2πkt/P} of each of the M periods
+/// of each channel (samples: P·M rows, one column per channel), at `lines`.
+/// Returns [l][k] = vector over channels. FFTW r2c, one plan per call.
+std::vector<std::vector<Eigen::VectorXcd>> period_spectra(const Eigen::MatrixXd& samples, int period, int periods,
+                                                          const std::vector<int>& lines);
+
+/// Sample statistics over M ≥ 2 experiments: Eq. (25) for Ŷ, σ̂²_Y (and the
+/// same for U), Eq. (32) for σ̂_YU. `data` holds Û, Ŷ and σ̂²_Y / M (Section
+/// 4.1: the sample-subspace algorithm replaces Y, σ²_Y by Ŷ, σ̂²_Y/M).
+struct SampleStatistics {
+  FrfData data;
+  std::vector<Eigen::VectorXd> var_U;   ///< σ̂²_U(k) per input (1/(M−1) form, not divided by M)
+  std::vector<Eigen::MatrixXcd> cov_YU; ///< σ̂_YU(k) of Eq. (32), p × m, not divided by M
+  int M = 0;
+};
+/// U_l[l][k] ∈ C^m, Y_l[l][k] ∈ C^p. Throws Error(Input) for M < 2.
+SampleStatistics sample_statistics(Domain domain, const Eigen::VectorXd& omega,
+                                   const std::vector<std::vector<Eigen::VectorXcd>>& U_l,
+                                   const std::vector<std::vector<Eigen::VectorXcd>>& Y_l);
+
+/// Periodic input/output record (inputs then outputs as columns) → sample
+/// statistics at the excited lines. ω_k = 2πk/P (discrete, rad/sample) or
+/// 2πk/(P Ts) (continuous, rad/s). Throws Error(Input) naming what is wrong
+/// (rows ≠ P·M, no excited lines, a line outside 1 … P/2 or repeated, M < 2).
+SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta,
+                                   Domain domain);
+
+/// Section 5, errors-in-variables (SISO): U = 1, Ĝ = Ŷ/Û and variance σ̂²_G / M.
+/// Eq. (31) as printed divides σ̂_YU by Ŷ Û; the first-order expansion
+/// δG = G (δY/Y − δU/U) gives E[δY conj δU] / (Y conj U), so this uses
+/// σ̂²_G = |Ĝ|² (σ̂²_Y/|Ŷ|² + σ̂²_U/|Û|² − 2 Re(σ̂_YU / (Ŷ conj Û))).
+/// Eq. (34): lines whose input SNR |Û|² / (σ̂²_U/M) is below `min_input_snr`
+/// (default 10, the paper's 10 dB region) are dropped; how many is returned in
+/// `dropped`. When `first_pass` is given, the variance is evaluated at that
+/// model's G₁ instead of the noisy Ĝ:
+/// σ²_G = (σ̂²_Y + |G₁|² σ̂²_U − 2 Re(conj(G₁) σ̂_YU)) / (M |Û|²), which removes
+/// the correlation between Ĝ and its weight (the bias that does not vanish as F grows).
+FrfData errors_in_variables(const SampleStatistics& stats, const StateSpace* first_pass = nullptr,
+                            double min_input_snr = 10.0, int* dropped = nullptr);
+
+/// Section 5, improper models (n_b > n_a): the roles of input and output are
+/// swapped — U = 1, Ĥ = Û/Ŷ with the variance of Eq. (31) with the roles of U
+/// and Y exchanged (SISO), and the same line rule. The subspace algorithm then
+/// identifies the proper H = 1/G; a G with n_b > n_a has no state-space form,
+/// so the result is H, and the caller reports it as the inverse model.
+FrfData swap_input_output(const SampleStatistics& stats, double min_input_snr = 10.0, int* dropped = nullptr);
+
+}  // namespace fdsid

@@ -1,0 +1,828 @@
+// Pintelon (2002) frequency-domain subspace identification, double precision.
+#include "fdsid/frf_id.hpp"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "fdsid/error.hpp"
+#include "fftw_lock.hpp"
+
+namespace fdsid {
+
+namespace {
+
+constexpr double kUnitRoundoff = std::numeric_limits<double>::epsilon() / 2;
+
+std::string fmt(double x, int digits = 6) {
+  std::ostringstream s;
+  s.precision(digits);
+  s << x;
+  return s.str();
+}
+
+[[noreturn]] void fail(ErrorKind kind, const std::string& where, const std::string& what) {
+  throw Error(kind, where, what);
+}
+
+// ---------------------------------------------------------------------------
+// C (ξI − A)⁻¹ at many ξ. When A is diagonalisable with a well-conditioned
+// eigenvector basis V (κ(V) ≤ 100), C(ξI − A)⁻¹ = (C V) diag(1/(ξ − λ)) V⁻¹,
+// O(p n²) per ξ with no allocation and an error ≤ κ(V) u relative to the LU
+// route; otherwise one partial-pivoting LU of ξI − A per ξ (backward stable).
+class Resolvent {
+ public:
+  Resolvent(const Eigen::MatrixXd& A, const Eigen::MatrixXd& C) : A_(A), C_(C) {
+    const Eigen::Index n = A.rows();
+    if (n == 0) return;
+    Eigen::EigenSolver<Eigen::MatrixXd> es(A);
+    if (es.info() != Eigen::Success) return;
+    Eigen::MatrixXcd V = es.eigenvectors();
+    for (Eigen::Index i = 0; i < n; ++i) V.col(i).normalize();
+    Eigen::PartialPivLU<Eigen::MatrixXcd> lu(V);
+    const double rc = lu.rcond();
+    if (!(rc > 0.01)) return;  // κ₁(V) > 100: use the LU route
+    lambda_ = es.eigenvalues();
+    CV_ = C.cast<cplx>() * V;
+    Vinv_ = lu.inverse();
+    diagonal_ = true;
+  }
+  /// K = C (ξI − A)⁻¹ (p × n). Returns false when ξI − A is singular.
+  bool left(cplx xi, Eigen::MatrixXcd& K) const {
+    if (diagonal_) {
+      Eigen::VectorXcd d = (xi - lambda_.array()).inverse().matrix();
+      if (!d.allFinite()) return false;
+      K.noalias() = CV_ * d.asDiagonal() * Vinv_;
+      return K.allFinite();
+    }
+    Eigen::MatrixXcd M = -A_.transpose().cast<cplx>();
+    M.diagonal().array() += xi;
+    Eigen::PartialPivLU<Eigen::MatrixXcd> lu(M);
+    K = lu.solve(C_.transpose().cast<cplx>()).transpose();
+    return K.allFinite();
+  }
+
+ private:
+  Eigen::MatrixXd A_, C_;
+  bool diagonal_ = false;
+  Eigen::VectorXcd lambda_;
+  Eigen::MatrixXcd CV_, Vinv_;
+};
+
+// ---------------------------------------------------------------------------
+// Chunked Householder QR (TSQR). Rows come in groups (one group per frequency):
+// fill(g, rows) writes group g's `rows_per_group` rows. The R factor of the
+// whole tall matrix is accumulated as R of [R; next chunk], so the matrix is
+// never stored; threads work on contiguous ranges and their R's are merged by
+// one more QR. Returns R (cols × cols, upper triangular, row signs arbitrary).
+using RowFill = std::function<void(int, Eigen::Ref<Eigen::MatrixXd>)>;
+
+Eigen::MatrixXd tsqr_range(int g0, int g1, int rows_per_group, int cols, const RowFill& fill) {
+  const int chunk = std::max(1, 2048 / rows_per_group);
+  Eigen::MatrixXd work = Eigen::MatrixXd::Zero(cols + chunk * rows_per_group, cols);
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr;
+  for (int a = g0; a < g1; a += chunk) {
+    const int b = std::min(g1, a + chunk);
+    if (b - a < chunk) work.bottomRows((chunk - (b - a)) * rows_per_group).setZero();
+    for (int g = a; g < b; ++g) fill(g, work.middleRows(cols + (g - a) * rows_per_group, rows_per_group));
+    qr.compute(work);
+    work.topRows(cols) = qr.matrixQR().topRows(cols).triangularView<Eigen::Upper>();
+  }
+  return work.topRows(cols);
+}
+
+Eigen::MatrixXd tsqr(int groups, int rows_per_group, int cols, const RowFill& fill) {
+  // Threads only pay off on large problems (a Monte Carlo caller already runs
+  // identifications in parallel): ≥ 2^24 flops of QR per thread.
+  const double flops = 2.0 * groups * rows_per_group * double(cols) * cols;
+  int threads = static_cast<int>(std::min<double>(std::max(1u, std::thread::hardware_concurrency()), flops / (1 << 24)));
+  threads = std::max(1, std::min(threads, groups));
+  if (threads == 1) return tsqr_range(0, groups, rows_per_group, cols, fill);
+  std::vector<Eigen::MatrixXd> parts(threads);
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) {
+    const int a = static_cast<int>(static_cast<long long>(groups) * t / threads);
+    const int b = static_cast<int>(static_cast<long long>(groups) * (t + 1) / threads);
+    pool.emplace_back([&, t, a, b] { parts[t] = tsqr_range(a, b, rows_per_group, cols, fill); });
+  }
+  for (auto& th : pool) th.join();
+  Eigen::MatrixXd stacked(threads * cols, cols);
+  for (int t = 0; t < threads; ++t) stacked.middleRows(t * cols, cols) = parts[t];
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr(stacked);
+  return qr.matrixQR().topRows(cols).triangularView<Eigen::Upper>();
+}
+
+// ---------------------------------------------------------------------------
+// The row bases of Algorithm 1/2: column k of Wu (Wy) holds the r basis
+// functions evaluated at ξ_k for the input (output) rows of Z.
+struct Bases {
+  Eigen::MatrixXcd Wu, Wy;      // r × F
+  Eigen::VectorXcd xi;          // ξ_k used in step 3 (z, w or s/ω_s)
+  bool orthogonal = false;
+  Eigen::MatrixXd H;            // r × (r−1): s̃ q_j = Σ_i H(i, j) q_i (output basis)
+  double q0 = 1;                // the constant q_0 of the output basis
+  double omega_scale = 1;
+};
+
+double default_scale(const FrfData& d) {
+  return std::sqrt(d.omega.minCoeff() * d.omega.maxCoeff());
+}
+
+Eigen::MatrixXcd powers(const Eigen::VectorXcd& xi, int r) {
+  Eigen::MatrixXcd W(r, xi.size());
+  for (Eigen::Index k = 0; k < xi.size(); ++k) {
+    cplx v = 1;
+    for (int i = 0; i < r; ++i) {
+      W(i, k) = v;
+      v *= xi(k);
+    }
+  }
+  return W;
+}
+
+// Orthonormal real-coefficient polynomials q_0 … q_{r−1} in s̃ for the real
+// inner product ⟨p, q⟩ = Re Σ_k w_k p(s̃_k) conj q(s̃_k), by the Arnoldi
+// (Stieltjes) process with full re-orthogonalisation: s̃ q_j = Σ_{i≤j+1} H(i,j) q_i.
+// For s̃ on the imaginary axis H is tridiagonal with zero diagonal (Forsythe),
+// but the full process costs nothing extra at these r and is robust.
+Eigen::MatrixXcd arnoldi_basis(const Eigen::VectorXcd& s, const Eigen::VectorXd& w, int r, Eigen::MatrixXd* H,
+                               double* q0) {
+  const Eigen::Index F = s.size();
+  auto inner = [&](const Eigen::VectorXcd& a, const Eigen::VectorXcd& b) {
+    double acc = 0;
+    for (Eigen::Index k = 0; k < F; ++k) acc += w(k) * (a(k) * std::conj(b(k))).real();
+    return acc;
+  };
+  Eigen::MatrixXcd Q(F, r);
+  if (H) H->setZero(r, std::max(0, r - 1));
+  const double total = w.sum();
+  if (!(total > 0)) fail(ErrorKind::Numerical, "step 1a", "orthogonal basis: the weights are all zero");
+  Q.col(0).setConstant(1.0 / std::sqrt(total));
+  if (q0) *q0 = 1.0 / std::sqrt(total);
+  for (int j = 0; j + 1 < r; ++j) {
+    Eigen::VectorXcd v = s.cwiseProduct(Q.col(j));
+    for (int pass = 0; pass < 2; ++pass)
+      for (int i = 0; i <= j; ++i) {
+        const double h = inner(v, Q.col(i));
+        v -= h * Q.col(i);
+        if (H) (*H)(i, j) += h;
+      }
+    const double nv = std::sqrt(std::max(0.0, inner(v, v)));
+    if (!(nv > 0)) fail(ErrorKind::Numerical, "step 1a", "orthogonal basis breaks down at degree " + std::to_string(j + 1));
+    if (H) (*H)(j + 1, j) = nv;
+    Q.col(j + 1) = v / nv;
+  }
+  return Q.transpose();
+}
+
+Bases make_bases(const FrfData& d, int r, ContinuousMethod method, double omega_scale) {
+  Bases b;
+  const Eigen::Index F = d.frequencies();
+  b.xi.resize(F);
+  if (d.domain == Domain::Discrete) {
+    for (Eigen::Index k = 0; k < F; ++k) b.xi(k) = std::polar(1.0, d.omega(k));
+    b.Wu = powers(b.xi, r);
+    b.Wy = b.Wu;
+    return b;
+  }
+  b.omega_scale = omega_scale > 0 ? omega_scale : default_scale(d);
+  if (!(b.omega_scale > 0) || !std::isfinite(b.omega_scale))
+    fail(ErrorKind::Input, "omega_scale", "must be positive and finite, got " + fmt(b.omega_scale));
+  if (method == ContinuousMethod::Bilinear) {
+    for (Eigen::Index k = 0; k < F; ++k) {
+      const cplx st(0.0, d.omega(k) / b.omega_scale);
+      b.xi(k) = (st - 1.0) / (st + 1.0);
+    }
+    b.Wu = powers(b.xi, r);
+    b.Wy = b.Wu;
+    return b;
+  }
+  b.orthogonal = true;
+  for (Eigen::Index k = 0; k < F; ++k) b.xi(k) = cplx(0.0, d.omega(k) / b.omega_scale);
+  Eigen::VectorXd wu(F), wy(F);
+  for (Eigen::Index k = 0; k < F; ++k) {
+    wu(k) = d.U[k].squaredNorm();
+    wy(k) = d.Y[k].squaredNorm();
+  }
+  b.Wu = arnoldi_basis(b.xi, wu, r, nullptr, nullptr);
+  b.Wy = arnoldi_basis(b.xi, wy, r, &b.H, &b.q0);
+  return b;
+}
+
+// Step 1 (a-c): returns the whitened SVD and the factor L of C_Y.
+struct Step1 {
+  Eigen::MatrixXd L;       // C_Y = L Lᵀ
+  Eigen::MatrixXd Usvd;    // left singular vectors of L⁻¹ R22ᵀ
+  Eigen::VectorXd sigma;   // its singular values
+};
+
+Step1 step1(const FrfData& d, const Bases& b, int r) {
+  const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
+  const int nu = r * m, ny = r * p, cols = nu + ny;
+  if (2LL * F * c < cols)
+    fail(ErrorKind::Dimension, "step 1b",
+         "2 F c = " + std::to_string(2LL * F * c) + " real columns of Z are fewer than its r (m + p) = " +
+             std::to_string(cols) + " rows: more frequencies or a smaller r (r = " + std::to_string(r) + ")");
+  // Step 1a/1b. Rows of Zᵀ for frequency k, column j: Re and Im of
+  // [W_u(k) ⊗ U_j(k); W_y(k) ⊗ Y_j(k)] (Eqs. 9, 11, 18).
+  const RowFill fill = [&](int k, Eigen::Ref<Eigen::MatrixXd> rows) {
+    for (int j = 0; j < c; ++j)
+      for (int i = 0; i < r; ++i) {
+        const cplx wu = b.Wu(i, k), wy = b.Wy(i, k);
+        for (int a = 0; a < m; ++a) {
+          const cplx v = wu * d.U[k](a, j);
+          rows(2 * j, i * m + a) = v.real();
+          rows(2 * j + 1, i * m + a) = v.imag();
+        }
+        for (int a = 0; a < p; ++a) {
+          const cplx v = wy * d.Y[k](a, j);
+          rows(2 * j, nu + i * p + a) = v.real();
+          rows(2 * j + 1, nu + i * p + a) = v.imag();
+        }
+      }
+  };
+  const Eigen::MatrixXd R = tsqr(F, 2 * c, cols, fill);
+  // Assumption 3 (persistence of excitation): R11 must be non-singular. Its
+  // diagonal is |R11_ii|; rank deficiency shows as a diagonal entry at the
+  // rounding level, u · √(rows) · max |R11_ii| (Householder backward error).
+  const Eigen::VectorXd r11 = R.topLeftCorner(nu, nu).diagonal().cwiseAbs();
+  const double r11max = r11.maxCoeff();
+  const double floor11 = 100 * kUnitRoundoff * std::sqrt(2.0 * F * c) * r11max;
+  if (!(r11max > 0) || r11.minCoeff() <= floor11)
+    fail(ErrorKind::Numerical, "step 1b",
+         "the input data matrix U^re is rank deficient (min |R11_ii| / max = " + fmt(r11.minCoeff() / r11max, 3) +
+             "): the input does not excite r = " + std::to_string(r) +
+             " basis functions (Pintelon 2002 Assumption 3); use fewer r or more excited lines");
+  const Eigen::MatrixXd R22t = R.bottomRightCorner(ny, ny).transpose();
+  // Step 1c. C_Y = Σ Re((W_y W_yᴴ) ⊗ diag σ²): entry ((i,a),(i',a')) is
+  // δ_{aa'} Σ_{k,j} Re(W_i conj W_i') σ²_a(k, j).
+  Eigen::MatrixXd CY = Eigen::MatrixXd::Zero(ny, ny);
+  for (int a = 0; a < p; ++a) {
+    Eigen::MatrixXd block = Eigen::MatrixXd::Zero(r, r);
+    for (int k = 0; k < F; ++k) {
+      const double s2 = d.variance[k].row(a).sum();
+      const Eigen::VectorXcd w = b.Wy.col(k);
+      block.noalias() += s2 * (w * w.adjoint()).real();
+    }
+    for (int i = 0; i < r; ++i)
+      for (int i2 = 0; i2 < r; ++i2) CY(i * p + a, i2 * p + a) = block(i, i2);
+  }
+  Step1 s;
+  Eigen::LLT<Eigen::MatrixXd> llt(CY);
+  if (llt.info() != Eigen::Success)
+    fail(ErrorKind::Numerical, "step 1c", "C_Y is not positive definite (variances too small for r = " +
+                                              std::to_string(r) + ")");
+  s.L = llt.matrixL();
+  const Eigen::MatrixXd K = s.L.triangularView<Eigen::Lower>().solve(R22t);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(K, Eigen::ComputeFullU);
+  s.Usvd = svd.matrixU();
+  s.sigma = svd.singularValues();
+  return s;
+}
+
+// Step 3, Eq. (17): (B, D) minimising Σ |Y − (C(ξI − A)⁻¹B + D)U|² / σ²
+// as a real linear least-squares problem (Re and Im rows stacked).
+void step3(const FrfData& d, const Bases& b, const Eigen::MatrixXd& A, const Eigen::MatrixXd& C, Eigen::MatrixXd& B,
+           Eigen::MatrixXd& D) {
+  const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
+  const int n = static_cast<int>(A.rows());
+  const int nb = n * m, nd = p * m, cols = nb + nd + 1;  // last column: right-hand side
+  if (2LL * F * c * p < nb + nd)
+    fail(ErrorKind::Dimension, "step 3",
+         "2 F c p = " + std::to_string(2LL * F * c * p) + " equations for " + std::to_string(nb + nd) +
+             " unknowns of B and D");
+  // K_k = C (ξ_k I − A)⁻¹ (p × n).
+  std::vector<Eigen::MatrixXcd> K(F);
+  const Resolvent res(A, C);
+  for (int k = 0; k < F; ++k) {
+    if (!res.left(b.xi(k), K[k]))
+      fail(ErrorKind::Numerical, "step 3", "ξ_k I − A is singular at frequency index " + std::to_string(k + 1) +
+                                               " (a pole of the estimate lies on the data's frequency axis)");
+  }
+  const RowFill fill = [&](int k, Eigen::Ref<Eigen::MatrixXd> rows) {
+    int row = 0;
+    for (int j = 0; j < c; ++j)
+      for (int a = 0; a < p; ++a, row += 2) {
+        const double wgt = 1.0 / std::sqrt(d.variance[k](a, j));
+        rows.row(row).setZero();
+        rows.row(row + 1).setZero();
+        // Coefficient of B(e, f) (column-major index e + n f): K(a, e) U(f, j).
+        for (int f = 0; f < m; ++f) {
+          const cplx u = d.U[k](f, j);
+          for (int e = 0; e < n; ++e) {
+            const cplx v = wgt * K[k](a, e) * u;
+            rows(row, e + n * f) = v.real();
+            rows(row + 1, e + n * f) = v.imag();
+          }
+          // Coefficient of D(a, f) (column-major a + p f): U(f, j).
+          const cplx v = wgt * u;
+          rows(row, nb + a + p * f) = v.real();
+          rows(row + 1, nb + a + p * f) = v.imag();
+        }
+        const cplx y = wgt * d.Y[k](a, j);
+        rows(row, cols - 1) = y.real();
+        rows(row + 1, cols - 1) = y.imag();
+      }
+  };
+  const Eigen::MatrixXd R = tsqr(F, 2 * c * p, cols, fill);
+  const Eigen::MatrixXd R1 = R.topLeftCorner(nb + nd, nb + nd);
+  const Eigen::VectorXd rhs = R.topRightCorner(nb + nd, 1);
+  // Rank check as in step 1b (Assumption 5 (ii): a unique minimiser).
+  const Eigen::VectorXd diag = R1.diagonal().cwiseAbs();
+  if (!(diag.maxCoeff() > 0) ||
+      diag.minCoeff() <= 100 * kUnitRoundoff * std::sqrt(2.0 * F * c * p) * diag.maxCoeff())
+    fail(ErrorKind::Numerical, "step 3", "B and D are not determined by the data (Eq. 17 is rank deficient, "
+                                         "Pintelon 2002 Assumption 5 (ii))");
+  const Eigen::VectorXd theta = R1.triangularView<Eigen::Upper>().solve(rhs);
+  B = Eigen::Map<const Eigen::MatrixXd>(theta.data(), n, m);
+  D = Eigen::Map<const Eigen::MatrixXd>(theta.data() + nb, p, m);
+}
+
+int check_order_r(const FrfData& d, int order, int r) {
+  if (order < 1) fail(ErrorKind::Order, "order", "n_a must be at least 1, got " + std::to_string(order));
+  if (r <= order)
+    fail(ErrorKind::Dimension, "r", "r = " + std::to_string(r) + " must exceed the order n_a = " +
+                                        std::to_string(order) + " (Pintelon 2002 step 1a)");
+  if (order > r * d.outputs())
+    fail(ErrorKind::Dimension, "r", "order " + std::to_string(order) + " exceeds r p = " +
+                                        std::to_string(r * d.outputs()));
+  return r;
+}
+
+}  // namespace
+
+const char* to_string(ContinuousMethod m) {
+  return m == ContinuousMethod::Bilinear ? "bilinear" : "orthogonal";
+}
+
+FrfData frf_data(Domain domain, const Eigen::VectorXd& omega, const std::vector<Eigen::MatrixXcd>& G,
+                 const std::vector<Eigen::MatrixXd>& variance) {
+  FrfData d;
+  d.domain = domain;
+  d.omega = omega;
+  d.Y = G;
+  d.U.resize(G.size());
+  d.variance.resize(G.size());
+  d.has_noise_model = !variance.empty();
+  for (size_t k = 0; k < G.size(); ++k) {
+    d.U[k] = Eigen::MatrixXcd::Identity(G[k].cols(), G[k].cols());
+    d.variance[k] = variance.empty() ? Eigen::MatrixXd::Ones(G[k].rows(), G[k].cols()) : variance[k];
+  }
+  return d;
+}
+
+void validate(const FrfData& d, const std::string& where) {
+  const int F = d.frequencies();
+  if (F < 1) fail(ErrorKind::Input, where, "no frequencies");
+  if (static_cast<int>(d.U.size()) != F || static_cast<int>(d.Y.size()) != F ||
+      static_cast<int>(d.variance.size()) != F)
+    fail(ErrorKind::Input, where, "U, Y and variance must have one entry per frequency (" + std::to_string(F) + ")");
+  const int m = d.inputs(), p = d.outputs(), c = d.columns();
+  if (m < 1 || p < 1 || c < 1) fail(ErrorKind::Input, where, "needs at least one input, output and column");
+  if (!(d.sample_time > 0) || !std::isfinite(d.sample_time))
+    fail(ErrorKind::Input, where, "sample time must be positive and finite, got " + fmt(d.sample_time));
+  std::vector<std::pair<double, int>> sorted;
+  for (int k = 0; k < F; ++k) {
+    const std::string at = where + " frequency " + std::to_string(k + 1);
+    const double w = d.omega(k);
+    if (!std::isfinite(w)) fail(ErrorKind::Input, at, "omega is not finite");
+    if (d.domain == Domain::Discrete && (w < 0 || w > M_PI))
+      fail(ErrorKind::Grid, at, "omega = " + fmt(w) + " rad/sample is outside [0, pi]");
+    if (d.domain == Domain::Continuous && !(w > 0))
+      fail(ErrorKind::Grid, at, "omega = " + fmt(w) + " rad/s must be positive for continuous time");
+    sorted.emplace_back(w, k);
+    if (d.U[k].rows() != m || d.U[k].cols() != c || d.Y[k].rows() != p || d.Y[k].cols() != c ||
+        d.variance[k].rows() != p || d.variance[k].cols() != c)
+      fail(ErrorKind::Input, at, "inconsistent shapes of U, Y or variance");
+    if (!d.U[k].allFinite()) fail(ErrorKind::Input, at, "input is NaN or Inf");
+    if (!d.Y[k].allFinite()) fail(ErrorKind::Input, at, "output (FRF) is NaN or Inf");
+    for (int a = 0; a < p; ++a)
+      for (int j = 0; j < c; ++j) {
+        const double v = d.variance[k](a, j);
+        if (!(v > 0) || !std::isfinite(v))
+          fail(ErrorKind::Input, at, "variance " + fmt(v) + " must be positive and finite");
+      }
+  }
+  std::sort(sorted.begin(), sorted.end());
+  for (size_t i = 1; i < sorted.size(); ++i)
+    if (sorted[i].first == sorted[i - 1].first)
+      fail(ErrorKind::Grid, where + " frequency " + std::to_string(sorted[i].second + 1),
+           "omega = " + fmt(sorted[i].first, 17) + " repeats frequency " + std::to_string(sorted[i - 1].second + 1));
+}
+
+StateSpace fit_input_matrices(const FrfData& data, const Eigen::MatrixXd& A, const Eigen::MatrixXd& C) {
+  validate(data);
+  if (A.rows() != A.cols() || C.cols() != A.rows() || C.rows() != data.outputs())
+    fail(ErrorKind::Input, "fit_input_matrices", "A must be n x n and C p x n");
+  Bases b;
+  b.xi.resize(data.frequencies());
+  for (int k = 0; k < data.frequencies(); ++k)
+    b.xi(k) = data.domain == Domain::Discrete ? std::polar(1.0, data.omega(k)) : cplx(0.0, data.omega(k));
+  StateSpace m;
+  m.domain = data.domain;
+  m.sample_time = data.sample_time;
+  m.A = A;
+  m.C = C;
+  step3(data, b, A, C, m.B, m.D);
+  return m;
+}
+
+Eigen::MatrixXcd frequency_response(const StateSpace& model, double omega) {
+  return transfer(model, model.domain == Domain::Discrete ? std::polar(1.0, omega) : cplx(0.0, omega));
+}
+
+std::vector<Eigen::MatrixXcd> frequency_response(const StateSpace& model, const Eigen::VectorXd& omega) {
+  std::vector<Eigen::MatrixXcd> G(omega.size());
+  const Resolvent res(model.A, model.C);
+  Eigen::MatrixXcd K;
+  for (Eigen::Index k = 0; k < omega.size(); ++k) {
+    const cplx xi = model.domain == Domain::Discrete ? std::polar(1.0, omega(k)) : cplx(0.0, omega(k));
+    if (model.order() == 0) {
+      G[k] = model.D.cast<cplx>();
+    } else if (res.left(xi, K)) {
+      G[k] = K * model.B.cast<cplx>() + model.D.cast<cplx>();
+    } else {
+      G[k] = Eigen::MatrixXcd::Constant(model.outputs(), model.inputs(),
+                                        cplx(std::numeric_limits<double>::infinity(), 0.0));
+    }
+  }
+  return G;
+}
+
+double v_sub(const StateSpace& model, const FrfData& d) {
+  const std::vector<Eigen::MatrixXcd> G = frequency_response(model, d.omega);
+  double v = 0;
+  for (int k = 0; k < d.frequencies(); ++k) {
+    const Eigen::MatrixXcd e = d.Y[k] - G[k] * d.U[k];
+    v += (e.cwiseAbs2().array() / d.variance[k].array()).sum();
+  }
+  return v;
+}
+
+StateSpace bilinear_to_continuous(const StateSpace& w, double omega_scale) {
+  const int n = w.order();
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu(I - w.A);
+  // Condition of I − A_w: a w-domain pole near w = 1 is a continuous pole near
+  // s = ∞; refuse when it is singular to working precision.
+  const double rcond = lu.rcond();
+  if (!(rcond > 10 * kUnitRoundoff))
+    fail(ErrorKind::Numerical, "bilinear back-transformation",
+         "I - A_w is singular (reciprocal condition " + fmt(rcond, 3) +
+             "): the estimate has a pole at s = infinity; try another omega_scale");
+  const Eigen::MatrixXd IAinvB = lu.solve(w.B);
+  const Eigen::MatrixXd CIAinv = w.C * lu.inverse();
+  StateSpace c;
+  c.domain = Domain::Continuous;
+  c.sample_time = w.sample_time;
+  c.A = omega_scale * lu.solve(I + w.A);
+  c.B = omega_scale * std::sqrt(2.0) * IAinvB;
+  c.C = std::sqrt(2.0) * CIAinv;
+  c.D = w.D + w.C * IAinvB;
+  return c;
+}
+
+Eigen::VectorXd frf_singular_values(const FrfData& data, int r, ContinuousMethod continuous, double omega_scale) {
+  validate(data);
+  if (r < 2) fail(ErrorKind::Dimension, "r", "r must be at least 2, got " + std::to_string(r));
+  const Bases b = make_bases(data, r, continuous, omega_scale);
+  return step1(data, b, r).sigma;
+}
+
+FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMethod continuous, double omega_scale) {
+  validate(d);
+  check_order_r(d, order, r);
+  const int p = d.outputs(), n = order;
+  const Bases b = make_bases(d, r, continuous, omega_scale);
+  const Step1 s1 = step1(d, b, r);
+  if (!(s1.sigma(n - 1) > 0))
+    fail(ErrorKind::Order, "step 1c", "singular value " + std::to_string(n) + " is zero: the data hold no order-" +
+                                          std::to_string(n) + " model");
+  // Ô_r = C_Y^{1/2} U[:, 1:n_a] with the same factor L (step 1c).
+  const Eigen::MatrixXd O = s1.L.triangularView<Eigen::Lower>() * s1.Usvd.leftCols(n);
+  // Step 2, Eq. (19): Ô[1:r−1] A = Ô[2:r] (power bases) or the generalised
+  // shift Ô_⊥[0:r−2] A = (Hᵀ ⊗ I_p) Ô_⊥ (orthogonal bases: row block i is
+  // C q_i(A), and s̃ q_j(s̃) = Σ_i H(i, j) q_i(s̃) holds for A as for s̃).
+  const Eigen::MatrixXd top = O.topRows((r - 1) * p);
+  Eigen::MatrixXd rhs;
+  if (b.orthogonal) {
+    rhs = Eigen::MatrixXd::Zero((r - 1) * p, n);
+    for (int j = 0; j + 1 < r; ++j)
+      for (int i = 0; i <= j + 1; ++i)
+        if (b.H(i, j) != 0) rhs.middleRows(j * p, p) += b.H(i, j) * O.middleRows(i * p, p);
+  } else {
+    rhs = O.bottomRows((r - 1) * p);
+  }
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(top);
+  const Eigen::VectorXd top_sv = Eigen::JacobiSVD<Eigen::MatrixXd>(top).singularValues();
+  if (qr.rank() < n)
+    fail(ErrorKind::Numerical, "step 2", "the shifted observability matrix has rank " + std::to_string(qr.rank()) +
+                                             " < n_a = " + std::to_string(n));
+  StateSpace est;
+  est.domain = Domain::Discrete;
+  est.sample_time = d.sample_time;
+  est.A = qr.solve(rhs);
+  est.C = O.topRows(p) / (b.orthogonal ? b.q0 : 1.0);
+  step3(d, b, est.A, est.C, est.B, est.D);
+  if (!est.A.allFinite() || !est.B.allFinite() || !est.C.allFinite() || !est.D.allFinite())
+    fail(ErrorKind::Numerical, "step 3", "the estimate is not finite");
+
+  FrfResult res;
+  if (d.domain == Domain::Continuous) {
+    if (b.orthogonal) {
+      est.domain = Domain::Continuous;
+      est.A *= b.omega_scale;
+      est.B *= b.omega_scale;
+    } else {
+      est = bilinear_to_continuous(est, b.omega_scale);
+    }
+  }
+  res.model = est;
+  res.order = n;
+  res.r = r;
+  res.order_r = r;
+  res.singular_values = s1.sigma;
+  // First-order sensitivity of Â to rounding: the subspace of step 1c moves
+  // by ~u σ_1/σ_n (Wedin), and the least-squares solve of step 2 multiplies
+  // that by cond(Ô_top).
+  res.condition = (s1.sigma(0) / s1.sigma(n - 1)) * (top_sv(0) / top_sv(n - 1));
+  res.error_estimate = kUnitRoundoff * res.condition;
+  res.v_sub = v_sub(est, d);
+  res.poles = poles(est);
+  return res;
+}
+
+FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
+  validate(d);
+  const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
+  // The largest r for which Z has at least as many columns as rows (step 1b).
+  const int r_feasible = static_cast<int>(2LL * F * c / (m + p));
+  int order = o.order;
+  int order_r = o.r;
+  Eigen::VectorXd order_sigma;
+  double edge = 0;
+  if (order == 0) {
+    if (order_r == 0) order_r = std::min(20, r_feasible);
+    if (order_r < 2)
+      fail(ErrorKind::Dimension, "order", "too few frequencies (" + std::to_string(F) + ") to read an order");
+    const int n_max = o.max_order > 0 ? std::min(o.max_order, order_r * p - 1) : std::min(20, order_r * p - 1);
+    order_sigma = frf_singular_values(d, order_r, o.continuous, o.omega_scale);
+    if (d.has_noise_model) {
+      // Whitened noise (C_Y = E[𝐍^re 𝐍^reᵀ]) has squared singular values
+      // spread over the Marchenko–Pastur law of ratio γ = r p / (F c) (F c
+      // complex columns; the Re/Im halves of one column are not independent);
+      // its upper edge (1 + √γ)² is the noise level. A component counts as
+      // model when its square exceeds twice that edge (margin for the
+      // sample-variance weighting and the projection Π).
+      const double gamma = double(order_r) * p / (double(F) * c);
+      edge = std::pow(1 + std::sqrt(gamma), 2);
+      order = 0;
+      while (order < n_max && order_sigma(order) * order_sigma(order) > 2 * edge) ++order;
+      if (order == 0)
+        fail(ErrorKind::Order, "order", "no singular value of step 1c rises above the noise level (largest " +
+                                            fmt(order_sigma(0) * order_sigma(0), 3) + " vs edge " + fmt(edge, 3) +
+                                            "): the data hold no identifiable dynamics at this noise level");
+    } else {
+      // Without a noise model: the largest gap σ_n / σ_{n+1}, n = 1 … n_max.
+      double best = -1;
+      for (int n = 1; n <= n_max && n < order_sigma.size(); ++n) {
+        const double ratio = order_sigma(n - 1) / std::max(order_sigma(n), order_sigma(0) * kUnitRoundoff);
+        if (ratio > best) {
+          best = ratio;
+          order = n;
+        }
+      }
+    }
+  }
+  FrfResult best;
+  if (o.r > 0) {
+    best = identify_frf_fixed(d, order, o.r, o.continuous, o.omega_scale);
+  } else {
+    // Section 5: r minimising V_SUB (Eq. 35) over [1.5 n_a, 6 n_a], a craggy
+    // function of r, so every r is tried.
+    const int r_lo = o.r_min > 0 ? o.r_min : std::max(order + 1, (3 * order + 1) / 2);
+    const int r_hi = std::min(r_feasible, o.r_max > 0 ? o.r_max : std::max(r_lo, 6 * order));
+    if (r_hi < r_lo)
+      fail(ErrorKind::Dimension, "r", "no r in [" + std::to_string(r_lo) + ", " + std::to_string(r_hi) +
+                                          "] fits " + std::to_string(F) + " frequencies (need 2 F c >= r (m + p))");
+    bool found = false;
+    std::string last_error;
+    std::vector<std::pair<int, double>> scan;
+    for (int r = r_lo; r <= r_hi; ++r) {
+      try {
+        FrfResult res = identify_frf_fixed(d, order, r, o.continuous, o.omega_scale);
+        scan.emplace_back(r, res.v_sub);
+        if (!found || res.v_sub < best.v_sub) {
+          best = std::move(res);
+          found = true;
+        }
+      } catch (const Error& e) {
+        last_error = e.what();
+      }
+    }
+    if (!found)
+      fail(ErrorKind::Numerical, "r selection",
+           "every r in [" + std::to_string(r_lo) + ", " + std::to_string(r_hi) + "] failed; last: " + last_error);
+    best.r_scan = std::move(scan);
+  }
+  if (order_sigma.size() > 0) {
+    best.singular_values = order_sigma;
+    best.order_r = order_r;
+  }
+  best.noise_edge = edge;
+  return best;
+}
+
+// ---------------------------------------------------------------------------
+
+std::vector<std::vector<Eigen::VectorXcd>> period_spectra(const Eigen::MatrixXd& samples, int period, int periods,
+                                                          const std::vector<int>& lines) {
+  if (period < 2) fail(ErrorKind::Input, "meta field \"period\"", "must be at least 2, got " + std::to_string(period));
+  if (periods < 1) fail(ErrorKind::Input, "meta field \"periods\"", "must be at least 1, got " + std::to_string(periods));
+  if (samples.rows() != static_cast<Eigen::Index>(period) * periods)
+    fail(ErrorKind::Input, "data",
+         std::to_string(samples.rows()) + " samples are not " + std::to_string(periods) + " whole periods of " +
+             std::to_string(period) + " (expected " + std::to_string(static_cast<long long>(period) * periods) + ")");
+  if (!samples.allFinite()) fail(ErrorKind::Input, "data", "contains NaN or Inf");
+  for (int k : lines)
+    if (k < 1 || k > period / 2)
+      fail(ErrorKind::Input, "meta field \"excited_lines\"",
+           "line " + std::to_string(k) + " is outside 1 ... P/2 = " + std::to_string(period / 2));
+  const int channels = static_cast<int>(samples.cols());
+  const int bins = period / 2 + 1;
+  std::vector<double> in(period);
+  std::vector<fftw_complex> out(bins);
+  fftw_plan plan;
+  {
+    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
+    plan = fftw_plan_dft_r2c_1d(period, in.data(), out.data(), FFTW_ESTIMATE);
+  }
+  const double scale = 1.0 / std::sqrt(static_cast<double>(period));  // Eq. (4)
+  std::vector<std::vector<Eigen::VectorXcd>> res(periods, std::vector<Eigen::VectorXcd>(lines.size(),
+                                                                                       Eigen::VectorXcd(channels)));
+  for (int l = 0; l < periods; ++l)
+    for (int ch = 0; ch < channels; ++ch) {
+      for (int t = 0; t < period; ++t) in[t] = samples(static_cast<Eigen::Index>(l) * period + t, ch);
+      fftw_execute(plan);
+      for (size_t i = 0; i < lines.size(); ++i)
+        res[l][i](ch) = scale * cplx(out[lines[i]][0], out[lines[i]][1]);
+    }
+  {
+    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
+    fftw_destroy_plan(plan);
+  }
+  return res;
+}
+
+SampleStatistics sample_statistics(Domain domain, const Eigen::VectorXd& omega,
+                                   const std::vector<std::vector<Eigen::VectorXcd>>& U_l,
+                                   const std::vector<std::vector<Eigen::VectorXcd>>& Y_l) {
+  const int M = static_cast<int>(Y_l.size());
+  if (M < 2)
+    fail(ErrorKind::Input, "periods",
+         "M = " + std::to_string(M) + ": a sample variance needs M >= 2 periods (Pintelon 2002 Eq. 25)");
+  if (static_cast<int>(U_l.size()) != M) fail(ErrorKind::Input, "periods", "input and output period counts differ");
+  const int F = static_cast<int>(omega.size());
+  SampleStatistics st;
+  st.M = M;
+  FrfData& d = st.data;
+  d.domain = domain;
+  d.omega = omega;
+  d.U.resize(F);
+  d.Y.resize(F);
+  d.variance.resize(F);
+  st.var_U.resize(F);
+  st.cov_YU.resize(F);
+  for (int k = 0; k < F; ++k) {
+    Eigen::VectorXcd mu = Eigen::VectorXcd::Zero(U_l[0][k].size()), my = Eigen::VectorXcd::Zero(Y_l[0][k].size());
+    for (int l = 0; l < M; ++l) {
+      mu += U_l[l][k];
+      my += Y_l[l][k];
+    }
+    mu /= M;
+    my /= M;
+    Eigen::VectorXd vy = Eigen::VectorXd::Zero(my.size()), vu = Eigen::VectorXd::Zero(mu.size());
+    Eigen::MatrixXcd cyu = Eigen::MatrixXcd::Zero(my.size(), mu.size());
+    for (int l = 0; l < M; ++l) {
+      const Eigen::VectorXcd dy = Y_l[l][k] - my, du = U_l[l][k] - mu;
+      vy += dy.cwiseAbs2();
+      vu += du.cwiseAbs2();
+      cyu += dy * du.adjoint();  // Eq. (32): (Y − Ŷ) conj(U − Û)
+    }
+    d.U[k] = mu;
+    d.Y[k] = my;
+    d.variance[k] = vy / (double(M - 1) * M);  // σ̂²_Y / M, Section 4.1
+    st.var_U[k] = vu / double(M - 1);
+    st.cov_YU[k] = cyu / double(M - 1);
+  }
+  return st;
+}
+
+SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta,
+                                   Domain domain) {
+  if (meta.periods < 2)
+    fail(ErrorKind::Input, "meta field \"periods\"",
+         "M = " + std::to_string(meta.periods) + ": the sample variance needs at least 2 periods");
+  if (meta.excited_lines.empty()) fail(ErrorKind::Input, "meta field \"excited_lines\"", "no excited lines");
+  std::set<int> seen;
+  for (int k : meta.excited_lines)
+    if (!seen.insert(k).second)
+      fail(ErrorKind::Input, "meta field \"excited_lines\"", "line " + std::to_string(k) + " is listed twice");
+  if (!(meta.sample_time > 0) || !std::isfinite(meta.sample_time))
+    fail(ErrorKind::Input, "meta field \"sample_time\"", "must be positive, got " + fmt(meta.sample_time));
+  if (inputs < 1 || inputs >= samples.cols())
+    fail(ErrorKind::Input, "data", "needs at least one input and one output column");
+  const auto spectra = period_spectra(samples, meta.period, meta.periods, meta.excited_lines);
+  const int F = static_cast<int>(meta.excited_lines.size());
+  Eigen::VectorXd omega(F);
+  for (int k = 0; k < F; ++k)
+    omega(k) = 2 * M_PI * meta.excited_lines[k] / meta.period / (domain == Domain::Continuous ? meta.sample_time : 1.0);
+  std::vector<std::vector<Eigen::VectorXcd>> U_l(meta.periods), Y_l(meta.periods);
+  const int outputs = static_cast<int>(samples.cols()) - inputs;
+  for (int l = 0; l < meta.periods; ++l)
+    for (int k = 0; k < F; ++k) {
+      U_l[l].push_back(spectra[l][k].head(inputs));
+      Y_l[l].push_back(spectra[l][k].tail(outputs));
+    }
+  SampleStatistics st = sample_statistics(domain, omega, U_l, Y_l);
+  st.data.sample_time = meta.sample_time;
+  for (int k = 0; k < F; ++k)
+    for (int a = 0; a < outputs; ++a)
+      if (!(st.data.variance[k](a, 0) > 0))
+        fail(ErrorKind::Input, "data line " + std::to_string(meta.excited_lines[k]),
+             "output " + std::to_string(a + 1) +
+                 " has zero sample variance over the periods (noise-free or repeated records): no noise model");
+  return st;
+}
+
+namespace {
+
+// Ratio data with the first-order variance of Eq. (31) (corrected) for
+// num / den, where (num, den) = (Y, U) or (U, Y). Lines with a denominator
+// SNR below min_snr are dropped (the practical form of Eq. 34).
+FrfData ratio_data(const SampleStatistics& st, bool swap, const StateSpace* first_pass, double min_snr,
+                   int* dropped) {
+  const FrfData& s = st.data;
+  if (s.inputs() != 1 || s.outputs() != 1)
+    fail(ErrorKind::Input, "errors-in-variables", "Section 5's ratio estimate is implemented for SISO data only");
+  FrfData d;
+  d.domain = s.domain;
+  d.sample_time = s.sample_time;
+  std::vector<double> omega;
+  int drop = 0;
+  const double M = st.M;
+  for (int k = 0; k < s.frequencies(); ++k) {
+    const cplx Y = s.Y[k](0, 0), U = s.U[k](0, 0);
+    const double vY = s.variance[k](0, 0) * M;  // σ̂²_Y (not divided by M)
+    const double vU = st.var_U[k](0);
+    const cplx cYU = st.cov_YU[k](0, 0);
+    const cplx num = swap ? U : Y, den = swap ? Y : U;
+    const double vnum = swap ? vU : vY, vden = swap ? vY : vU;
+    const cplx cnd = swap ? std::conj(cYU) : cYU;  // E[δnum conj δden]
+    if (!(std::norm(den) > min_snr * vden / M)) {
+      ++drop;
+      continue;
+    }
+    const cplx G = num / den;
+    double var;
+    if (first_pass && !swap) {
+      const cplx G1 = frequency_response(*first_pass, s.omega(k))(0, 0);
+      var = (vnum + std::norm(G1) * vden - 2 * (std::conj(G1) * cnd).real()) / std::norm(den);
+    } else {
+      // Eq. (31) with the conjugate of the denominator in the cross term.
+      var = std::norm(G) * (vnum / std::norm(num) + vden / std::norm(den) - 2 * (cnd / (num * std::conj(den))).real());
+    }
+    var /= M;
+    if (!(var > 0) || !std::isfinite(var)) {
+      ++drop;
+      continue;
+    }
+    omega.push_back(s.omega(k));
+    d.U.push_back(Eigen::MatrixXcd::Ones(1, 1));
+    d.Y.push_back(Eigen::MatrixXcd::Constant(1, 1, G));
+    d.variance.push_back(Eigen::MatrixXd::Constant(1, 1, var));
+  }
+  d.omega = Eigen::Map<Eigen::VectorXd>(omega.data(), static_cast<Eigen::Index>(omega.size()));
+  if (dropped) *dropped = drop;
+  if (omega.empty())
+    fail(ErrorKind::Input, "errors-in-variables", "every line has an input SNR below " + fmt(min_snr, 3));
+  return d;
+}
+
+}  // namespace
+
+FrfData errors_in_variables(const SampleStatistics& st, const StateSpace* first_pass, double min_snr, int* dropped) {
+  return ratio_data(st, false, first_pass, min_snr, dropped);
+}
+
+FrfData swap_input_output(const SampleStatistics& st, double min_snr, int* dropped) {
+  return ratio_data(st, true, nullptr, min_snr, dropped);
+}
+
+}  // namespace fdsid

@@ -1,0 +1,71 @@
+#include "fdsid/simulate.hpp"
+
+#include <fftw3.h>
+
+#include <cmath>
+#include <mutex>
+#include <random>
+
+#include "fdsid/error.hpp"
+#include "fftw_lock.hpp"
+
+namespace fdsid {
+
+Eigen::MatrixXd simulate_periodic_record(const StateSpace& model, const RecordOptions& o, RecordMeta& meta) {
+  validate(model);
+  if (model.domain != Domain::Discrete || model.inputs() != 1 || model.outputs() != 1)
+    throw Error(ErrorKind::Input, "model", "records are simulated for discrete-time SISO models");
+  if (o.period < 4 || o.periods < 1)
+    throw Error(ErrorKind::Input, "record", "needs period >= 4 and periods >= 1");
+  if (!(o.rms > 0) || !(o.output_noise_std >= 0) || !(o.input_noise_std >= 0))
+    throw Error(ErrorKind::Input, "record", "rms must be positive and noise levels non-negative");
+  const int P = o.period;
+  std::vector<int> lines = o.lines;
+  if (lines.empty())
+    for (int k = 1; k < P / 4; k += 2) lines.push_back(k);
+  for (int k : lines)
+    if (k < 1 || k >= P / 2)
+      throw Error(ErrorKind::Input, "record", "excited line " + std::to_string(k) + " is outside 1 ... P/2 - 1");
+  std::mt19937_64 gen(o.seed);
+  std::uniform_real_distribution<double> phase(0.0, 2 * M_PI);
+  const int bins = P / 2 + 1;
+  std::vector<fftw_complex> U(bins), Y(bins);
+  for (int k = 0; k < bins; ++k) U[k][0] = U[k][1] = Y[k][0] = Y[k][1] = 0;
+  for (int k : lines) {
+    const cplx u = std::polar(1.0, phase(gen));
+    const cplx y = transfer(model, std::polar(1.0, 2 * M_PI * k / P))(0, 0) * u;
+    U[k][0] = u.real();
+    U[k][1] = u.imag();
+    Y[k][0] = y.real();
+    Y[k][1] = y.imag();
+  }
+  std::vector<double> u(P), y(P);
+  {
+    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
+    fftw_plan pu = fftw_plan_dft_c2r_1d(P, U.data(), u.data(), FFTW_ESTIMATE);
+    fftw_plan py = fftw_plan_dft_c2r_1d(P, Y.data(), y.data(), FFTW_ESTIMATE);
+    fftw_execute(pu);
+    fftw_execute(py);
+    fftw_destroy_plan(pu);
+    fftw_destroy_plan(py);
+  }
+  double ss = 0;
+  for (double v : u) ss += v * v;
+  const double scale = o.rms / std::sqrt(ss / P);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::MatrixXd rec(static_cast<Eigen::Index>(P) * o.periods, 2);
+  for (int l = 0; l < o.periods; ++l)
+    for (int t = 0; t < P; ++t) {
+      const Eigen::Index i = static_cast<Eigen::Index>(l) * P + t;
+      rec(i, 0) = scale * u[t] + o.input_noise_std * normal(gen);
+      rec(i, 1) = scale * y[t] + o.output_noise_std * normal(gen);
+    }
+  meta = RecordMeta{};
+  meta.period = P;
+  meta.periods = o.periods;
+  meta.sample_time = model.sample_time;
+  meta.excited_lines = lines;
+  return rec;
+}
+
+}  // namespace fdsid

@@ -1,0 +1,594 @@
+// Pintelon (2002) frequency-domain subspace identification in 50-digit
+// arithmetic, transcribed from Sections 2-5 of the paper.
+//
+// Decompositions instantiated in this translation unit (each costs seconds of
+// compile time with the multiprecision scalar): LLT, JacobiSVD and
+// ColPivHouseholderQR over MatrixR. Complex linear systems are solved in their
+// real 2n × 2n form so that no complex decomposition is needed; eigenvalues
+// come from eigenvalues() of spectrum_id.cpp.
+#include "fdsid/reference/frf_id.hpp"
+
+#include <boost/math/constants/constants.hpp>
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace fdsid::reference {
+namespace {
+
+using VectorR = Eigen::Matrix<Real, Eigen::Dynamic, 1>;
+using VectorC = Eigen::Matrix<Complex, Eigen::Dynamic, 1>;
+
+const Real& unit_roundoff() {
+  static const Real u = std::numeric_limits<Real>::epsilon();
+  return u;
+}
+
+std::string fmt(const Real& x, int digits = 6) {
+  return x.str(digits, std::ios_base::scientific);
+}
+
+std::string at(std::size_t k) { return "frequency index " + std::to_string(k); }
+
+bool finite(const Real& x) { return (boost::multiprecision::isfinite)(x); }
+bool finite(const Complex& z) { return finite(z.real()) && finite(z.imag()); }
+
+// X ⊗ Y (Kronecker product), as in the paper's notation section.
+MatrixC kron(const MatrixC& X, const MatrixC& Y) {
+  MatrixC K(X.rows() * Y.rows(), X.cols() * Y.cols());
+  for (Eigen::Index i = 0; i < X.rows(); ++i)
+    for (Eigen::Index j = 0; j < X.cols(); ++j)
+      K.block(i * Y.rows(), j * Y.cols(), Y.rows(), Y.cols()) = X(i, j) * Y;
+  return K;
+}
+
+// Dimensions of validated data.
+struct Shape {
+  int F = 0, m = 0, p = 0, c = 0;
+};
+
+Shape check_data(const FrfData& d) {
+  if (d.domain != "discrete" && d.domain != "continuous")
+    throw InputError("data: domain \"" + d.domain + "\" is neither \"discrete\" nor \"continuous\"");
+  Shape s;
+  s.F = static_cast<int>(d.omega.size());
+  if (s.F < 1) throw InputError("data: no frequencies");
+  if (d.U.size() != d.omega.size() || d.Y.size() != d.omega.size() ||
+      d.variance.size() != d.omega.size())
+    throw InputError("data: " + std::to_string(d.omega.size()) + " frequencies but " +
+                     std::to_string(d.U.size()) + " U, " + std::to_string(d.Y.size()) + " Y and " +
+                     std::to_string(d.variance.size()) + " variance matrices");
+  s.m = static_cast<int>(d.U[0].rows());
+  s.c = static_cast<int>(d.U[0].cols());
+  s.p = static_cast<int>(d.Y[0].rows());
+  if (s.m < 1 || s.c < 1 || s.p < 1)
+    throw InputError("data: U[0] is " + std::to_string(s.m) + "x" + std::to_string(s.c) +
+                     " and Y[0] has " + std::to_string(s.p) + " rows; all must be >= 1");
+  const Real pi = boost::math::constants::pi<Real>();
+  for (std::size_t k = 0; k < d.omega.size(); ++k) {
+    const Real& w = d.omega[k];
+    if (!finite(w)) throw InputError("data: omega at " + at(k) + " is not finite");
+    if (d.domain == "discrete" && (w < 0 || w > pi))
+      throw InputError("data: omega = " + fmt(w) + " at " + at(k) + " is outside [0, pi] (discrete)");
+    if (d.domain == "continuous" && !(w > 0))
+      throw InputError("data: omega = " + fmt(w) + " at " + at(k) + " is not > 0 (continuous)");
+    if (d.U[k].rows() != s.m || d.U[k].cols() != s.c)
+      throw InputError("data: U at " + at(k) + " is " + std::to_string(d.U[k].rows()) + "x" +
+                       std::to_string(d.U[k].cols()) + ", expected " + std::to_string(s.m) + "x" +
+                       std::to_string(s.c));
+    if (d.Y[k].rows() != s.p || d.Y[k].cols() != s.c)
+      throw InputError("data: Y at " + at(k) + " is " + std::to_string(d.Y[k].rows()) + "x" +
+                       std::to_string(d.Y[k].cols()) + ", expected " + std::to_string(s.p) + "x" +
+                       std::to_string(s.c));
+    if (d.variance[k].rows() != s.p || d.variance[k].cols() != s.c)
+      throw InputError("data: variance at " + at(k) + " is " +
+                       std::to_string(d.variance[k].rows()) + "x" +
+                       std::to_string(d.variance[k].cols()) + ", expected " + std::to_string(s.p) +
+                       "x" + std::to_string(s.c));
+    for (int i = 0; i < s.m; ++i)
+      for (int j = 0; j < s.c; ++j)
+        if (!finite(d.U[k](i, j)))
+          throw InputError("data: U(" + std::to_string(i) + "," + std::to_string(j) + ") at " +
+                           at(k) + " is not finite");
+    for (int i = 0; i < s.p; ++i)
+      for (int j = 0; j < s.c; ++j) {
+        if (!finite(d.Y[k](i, j)))
+          throw InputError("data: Y(" + std::to_string(i) + "," + std::to_string(j) + ") at " +
+                           at(k) + " is not finite");
+        const Real& v = d.variance[k](i, j);
+        if (!finite(v) || !(v > 0))
+          throw InputError("data: variance(" + std::to_string(i) + "," + std::to_string(j) +
+                           ") = " + fmt(v) + " at " + at(k) + " is not a positive number");
+      }
+  }
+  std::vector<std::pair<Real, std::size_t>> sorted;
+  for (std::size_t k = 0; k < d.omega.size(); ++k) sorted.emplace_back(d.omega[k], k);
+  std::sort(sorted.begin(), sorted.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (std::size_t i = 1; i < sorted.size(); ++i)
+    if (sorted[i].first == sorted[i - 1].first)
+      throw InputError("data: omega = " + fmt(sorted[i].first) + " is repeated (" +
+                       at(sorted[i - 1].second) + " and " + at(sorted[i].second) + ")");
+  return s;
+}
+
+// Solves (ξI − M)X = R for complex ξ and R through the real form
+// [[aI − M, −bI], [bI, aI − M]] [Re X; Im X] = [Re R; Im R], ξ = a + jb.
+// Returns false when the real matrix is numerically singular.
+bool resolvent_solve(const MatrixR& M, const Complex& xi, const MatrixC& R, MatrixC* X) {
+  const Eigen::Index n = M.rows();
+  MatrixR big(2 * n, 2 * n);
+  const MatrixR diag = xi.real() * MatrixR::Identity(n, n) - M;
+  const MatrixR off = xi.imag() * MatrixR::Identity(n, n);
+  big << diag, -off, off, diag;
+  MatrixR rhs(2 * n, R.cols());
+  rhs << R.real(), R.imag();
+  Eigen::ColPivHouseholderQR<MatrixR> qr(big);
+  qr.setThreshold(Real(1000) * unit_roundoff());
+  if (qr.rank() < 2 * n) return false;
+  const MatrixR sol = qr.solve(rhs);
+  X->resize(n, R.cols());
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < R.cols(); ++j) (*X)(i, j) = Complex(sol(i, j), sol(n + i, j));
+  return true;
+}
+
+// Least-squares solution of X θ = Y (full column rank required): the
+// Moore–Penrose solution (XᵀX)⁻¹XᵀY, computed by column-pivoted Householder
+// QR (identical in exact arithmetic, without squaring the condition number).
+bool least_squares(const MatrixR& X, const MatrixR& Y, MatrixR* theta) {
+  Eigen::ColPivHouseholderQR<MatrixR> qr(X);
+  qr.setThreshold(Real(1000) * unit_roundoff());
+  if (qr.rank() < X.cols()) return false;
+  *theta = qr.solve(Y);
+  return true;
+}
+
+// Rows of the data matrices: element (i, k) is the i-th basis polynomial at ξ_k.
+// Monomials (Eq. 7): ξ_k^i.
+MatrixC monomial_rows(const std::vector<Complex>& xi, int r) {
+  MatrixC W(r, xi.size());
+  for (std::size_t k = 0; k < xi.size(); ++k) {
+    Complex power(1);
+    for (int i = 0; i < r; ++i) {
+      W(i, k) = power;
+      power *= xi[k];
+    }
+  }
+  return W;
+}
+
+// Real polynomials q_0 … q_{r−1} (deg q_i = i, positive leading coefficient)
+// orthonormal for ⟨p, q⟩ = Σ_k Re(p(ξ_k) w_k conj q(ξ_k)) (Alg. 2.2).
+// Gram–Schmidt applied to ξ·q_{i−1} instead of ξ^i (the same space, hence the
+// same orthonormal polynomial), repeated once ("twice is enough"); the
+// coefficients give s̃ q_j = Σ_{i ≤ j+1} H_ij q_i.
+struct PolynomialBasis {
+  MatrixC values;  // r × F: q_i(ξ_k)
+  MatrixR T;       // r × r lower triangular: q_i(ξ) = Σ_l T_il ξ^l
+  MatrixR H;       // r × (r−1)
+};
+
+PolynomialBasis orthonormal_basis(const std::vector<Complex>& xi, const std::vector<Real>& w,
+                                  int r, const std::string& which) {
+  const std::size_t F = xi.size();
+  PolynomialBasis basis;
+  basis.values = MatrixC::Zero(r, F);
+  basis.T = MatrixR::Zero(r, r);
+  basis.H = MatrixR::Zero(r, r - 1);
+  auto inner = [&](const VectorC& a, const VectorC& b) {
+    Real sum = 0;
+    for (std::size_t k = 0; k < F; ++k) sum += w[k] * (a(k) * std::conj(b(k))).real();
+    return sum;
+  };
+  Real total = 0;
+  for (std::size_t k = 0; k < F; ++k) total += w[k];
+  if (!(total > 0)) throw StepError(1, which + " weights ||.||^2 are all zero");
+  const Real q0 = 1 / sqrt(total);
+  for (std::size_t k = 0; k < F; ++k) basis.values(0, k) = Complex(q0);
+  basis.T(0, 0) = q0;
+  for (int i = 1; i < r; ++i) {
+    VectorC v(F);
+    for (std::size_t k = 0; k < F; ++k) v(k) = xi[k] * basis.values(i - 1, k);
+    VectorR coef = VectorR::Zero(r);
+    for (int l = 1; l <= i; ++l) coef(l) = basis.T(i - 1, l - 1);
+    const Real norm_before = sqrt(inner(v, v));
+    for (int pass = 0; pass < 2; ++pass) {
+      for (int l = 0; l < i; ++l) {
+        const VectorC ql = basis.values.row(l).transpose();
+        const Real h = inner(v, ql);
+        v -= h * ql;
+        coef -= h * basis.T.row(l).transpose();
+        basis.H(l, i - 1) += h;
+      }
+    }
+    const Real norm = sqrt(inner(v, v));
+    if (!(norm > Real(1000) * unit_roundoff() * norm_before))
+      throw StepError(1, which + " polynomial basis: degree " + std::to_string(i) +
+                             " is dependent on lower degrees (too few frequencies with nonzero weight)");
+    basis.H(i, i - 1) = norm;
+    basis.values.row(i) = v.transpose() / Complex(norm);
+    basis.T.row(i) = coef.transpose() / norm;
+  }
+  return basis;
+}
+
+// State-space matrices of one run of Algorithm 1.
+struct Estimate {
+  MatrixR A, B, C, D;
+  std::vector<Real> singular_values;
+};
+
+// Algorithm 1 (steps 1-3) with general real polynomial rows: rows_u/rows_y
+// (r × F) hold the basis polynomials at ξ_k; H == nullptr means monomials
+// (shift property Eq. 12), otherwise the generalised shift with
+// s̃ q_j = Σ_i H_ij q_i and Ĉ = Ô[block 0] / q0.
+Estimate algorithm1(const FrfData& d, const Shape& s, const std::vector<Complex>& xi,
+                    const MatrixC& rows_u, const MatrixC& rows_y, const MatrixR* H, const Real& q0,
+                    int n, int r) {
+  const int F = s.F, m = s.m, p = s.p, c = s.c;
+  const int cols = F * c;  // complex block columns of Eq. (9)
+
+  // Step 1a: Eq. (9), (11), (18).
+  MatrixR U_re(r * m, 2 * cols), Y_re(r * p, 2 * cols);
+  MatrixR C_Y = MatrixR::Zero(r * p, r * p);
+  for (int k = 0; k < F; ++k) {
+    const MatrixC wu = rows_u.col(k), wy = rows_y.col(k);
+    for (int j = 0; j < c; ++j) {
+      const int q = k * c + j;
+      const MatrixC Uc = kron(wu, d.U[k].col(j));  // W_r(k) ⊗ U[k].col(j)
+      const MatrixC Yc = kron(wy, d.Y[k].col(j));  // W_r(k) ⊗ Y[k].col(j)
+      U_re.col(q) = Uc.real();
+      U_re.col(cols + q) = Uc.imag();
+      Y_re.col(q) = Yc.real();
+      Y_re.col(cols + q) = Yc.imag();
+      // C_Y += Re((W_r W_rᴴ) ⊗ diag σ²(k, j))
+      for (int a = 0; a < r; ++a)
+        for (int b = 0; b < r; ++b) {
+          const Real re = (wy(a) * std::conj(wy(b))).real();
+          for (int i = 0; i < p; ++i) C_Y(a * p + i, b * p + i) += re * d.variance[k](i, j);
+        }
+    }
+  }
+
+  // Step 1b: Eq. (20), 𝐘^re Π = 𝐘^re − (𝐘^re𝐔^reᵀ)(𝐔^re𝐔^reᵀ)⁻¹𝐔^re (Π not formed).
+  const MatrixR Gu = U_re * U_re.transpose();
+  // Positive definiteness by Cholesky; numerical rank deficiency by the ratio
+  // of the extreme pivots of L (a lower bound on √cond: LLT::rcond needs
+  // NumTraits<Real>::infinity(), which Boost 1.74 lacks).
+  Eigen::LLT<MatrixR> llt_u(Gu);
+  Real pivot_ratio = 0;
+  if (llt_u.info() == Eigen::Success) {
+    const VectorR diag = MatrixR(llt_u.matrixL()).diagonal();
+    pivot_ratio = diag.minCoeff() / diag.maxCoeff();
+  }
+  if (!(pivot_ratio * pivot_ratio > Real(100) * r * m * unit_roundoff()))
+    throw StepError(1, "U^re U^re^T is not positive definite (rank-deficient input data; "
+                       "pivot ratio " + fmt(pivot_ratio) + ")");
+  const MatrixR X = llt_u.solve(U_re * Y_re.transpose());  // (𝐔𝐔ᵀ)⁻¹𝐔𝐘ᵀ
+  const MatrixR YPi = Y_re - X.transpose() * U_re;        // 𝐘^re Π, stand-in for R22ᵀ
+
+  // Step 1c: C_Y = L Lᵀ; SVD of K = L⁻¹ (𝐘Π)(𝐘Π)ᵀ L⁻ᵀ = U Σ² Uᵀ; Ô_r = L U[:, 1:n].
+  Eigen::LLT<MatrixR> llt_c(C_Y);
+  if (llt_c.info() != Eigen::Success)
+    throw StepError(1, "C_Y is not positive definite (too few frequencies for r)");
+  const MatrixR L = llt_c.matrixL();
+  const MatrixR M1 = llt_c.matrixL().solve(YPi);
+  const MatrixR K = M1 * M1.transpose();
+  Eigen::JacobiSVD<MatrixR> svd(K, Eigen::ComputeFullU);
+  Estimate est;
+  for (Eigen::Index i = 0; i < svd.singularValues().size(); ++i)
+    est.singular_values.push_back(sqrt(svd.singularValues()(i)));
+  const MatrixR O = L * svd.matrixU().leftCols(n);
+
+  // Step 2: Eq. (19), or the generalised shift of Alg. 2.2.
+  const MatrixR O_up = O.topRows((r - 1) * p);
+  MatrixR rhs;
+  if (H == nullptr) {
+    rhs = O.bottomRows((r - 1) * p);  // Ô_r[2:r]
+    est.C = O.topRows(p);
+  } else {
+    rhs = MatrixR::Zero((r - 1) * p, n);
+    for (int j = 0; j < r - 1; ++j)
+      for (int i = 0; i <= j + 1; ++i) rhs.middleRows(j * p, p) += (*H)(i, j) * O.middleRows(i * p, p);
+    est.C = O.topRows(p) / q0;
+  }
+  if (!least_squares(O_up, rhs, &est.A))
+    throw StepError(2, "O_r[1:r-1] does not have full column rank " + std::to_string(n));
+
+  // Step 3: Eq. (17) with W = 1/σ_Y, linear in θ = [vec B; vec D] (column-major).
+  const int n_theta = n * m + p * m;
+  MatrixR Phi_re(2 * cols * p, n_theta), rhs_re(2 * cols * p, 1);
+  int row = 0;
+  for (int k = 0; k < F; ++k) {
+    MatrixC PhiT;  // (ξI − Aᵀ)⁻¹Cᵀ = (C(ξI − A)⁻¹)ᵀ
+    if (!resolvent_solve(est.A.transpose(), xi[k], est.C.transpose().cast<Complex>(), &PhiT))
+      throw StepError(3, "xi at " + at(k) + " is an eigenvalue of the estimated A");
+    for (int j = 0; j < c; ++j)
+      for (int i = 0; i < p; ++i, ++row) {
+        const Real weight = 1 / sqrt(d.variance[k](i, j));
+        Eigen::Matrix<Complex, 1, Eigen::Dynamic> a = Eigen::Matrix<Complex, 1, Eigen::Dynamic>::Zero(n_theta);
+        for (int b = 0; b < m; ++b) {
+          const Complex ub = d.U[k](b, j);
+          for (int l = 0; l < n; ++l) a(l + n * b) = PhiT(l, i) * ub;  // ∂/∂B(l,b)
+          a(n * m + i + p * b) = ub;                                    // ∂/∂D(i,b)
+        }
+        Phi_re.row(2 * row) = weight * a.real();
+        Phi_re.row(2 * row + 1) = weight * a.imag();
+        rhs_re(2 * row, 0) = weight * d.Y[k](i, j).real();
+        rhs_re(2 * row + 1, 0) = weight * d.Y[k](i, j).imag();
+      }
+  }
+  MatrixR theta;
+  if (!least_squares(Phi_re, rhs_re, &theta))
+    throw StepError(3, "the least-squares problem for B, D is rank deficient");
+  est.B.resize(n, m);
+  est.D.resize(p, m);
+  for (int b = 0; b < m; ++b) {
+    for (int l = 0; l < n; ++l) est.B(l, b) = theta(l + n * b, 0);
+    for (int i = 0; i < p; ++i) est.D(i, b) = theta(n * m + i + p * b, 0);
+  }
+  return est;
+}
+
+}  // namespace
+
+FrfResult identify_frf(const FrfData& data, const FrfOptions& options) {
+  const Shape s = check_data(data);
+  const int n = options.order, r = options.r;
+  if (n < 1) throw InputError("options: order = " + std::to_string(n) + " < 1");
+  if (r <= n)
+    throw InputError("options: r = " + std::to_string(r) + " must exceed order = " + std::to_string(n));
+  if (2 * s.F * s.c < r * (s.m + s.p))
+    throw InputError("data: too few frequencies: 2 F c = " + std::to_string(2 * s.F * s.c) +
+                     " < r (m + p) = " + std::to_string(r * (s.m + s.p)) +
+                     " (step 1b needs Z^T to have at least as many rows as columns)");
+  if (2 * s.F * s.c * s.p < n * s.m + s.p * s.m)
+    throw InputError("data: too few frequencies: 2 F c p = " + std::to_string(2 * s.F * s.c * s.p) +
+                     " equations < n m + p m = " + std::to_string(n * s.m + s.p * s.m) +
+                     " unknowns of B, D (step 3)");
+  const bool continuous = data.domain == "continuous";
+  const std::string method = options.continuous_method;
+  if (continuous && method != "bilinear" && method != "orthogonal")
+    throw InputError("options: continuous_method \"" + method +
+                     "\" is neither \"bilinear\" nor \"orthogonal\"");
+  Real scale = options.omega_scale;
+  if (!finite(scale) || scale < 0)
+    throw InputError("options: omega_scale = " + fmt(scale) + " must be >= 0 (0 = automatic)");
+  if (continuous && scale == 0) {
+    const auto [lo, hi] = std::minmax_element(data.omega.begin(), data.omega.end());
+    scale = sqrt(*lo * *hi);
+  }
+
+  std::vector<Complex> xi(s.F);
+  Estimate est;
+  if (!continuous) {
+    for (int k = 0; k < s.F; ++k) xi[k] = Complex(cos(data.omega[k]), sin(data.omega[k]));
+    const MatrixC W = monomial_rows(xi, r);
+    est = algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r);
+  } else if (method == "bilinear") {
+    // Alg. 2.1: w = (s̃ − 1)/(s̃ + 1), s̃ = jω/ω_scale; |w| = 1.
+    for (int k = 0; k < s.F; ++k) {
+      const Complex st(Real(0), data.omega[k] / scale);
+      xi[k] = (st - Real(1)) / (st + Real(1));
+    }
+    const MatrixC W = monomial_rows(xi, r);
+    const Estimate w = algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r);
+    Model w_model;
+    w_model.A = w.A;
+    w_model.B = w.B;
+    w_model.C = w.C;
+    w_model.D = w.D;
+    const Model cont = bilinear_to_continuous(w_model, scale);
+    est.singular_values = w.singular_values;
+    est.A = cont.A;
+    est.B = cont.B;
+    est.C = cont.C;
+    est.D = cont.D;
+  } else {
+    // Alg. 2.2: ξ = s̃ with orthonormal polynomial rows.
+    std::vector<Real> weight_u(s.F), weight_y(s.F);
+    for (int k = 0; k < s.F; ++k) {
+      xi[k] = Complex(Real(0), data.omega[k] / scale);
+      weight_u[k] = data.U[k].squaredNorm();
+      weight_y[k] = data.Y[k].squaredNorm();
+    }
+    const PolynomialBasis bu = orthonormal_basis(xi, weight_u, r, "input");
+    const PolynomialBasis by = orthonormal_basis(xi, weight_y, r, "output");
+    est = algorithm1(data, s, xi, bu.values, by.values, &by.H, by.T(0, 0), n, r);
+    est.A *= scale;
+    est.B *= scale;
+  }
+
+  FrfResult result;
+  result.model.domain = data.domain;
+  result.model.sample_time = continuous ? Real(0) : Real(1);
+  result.model.A = est.A;
+  result.model.B = est.B;
+  result.model.C = est.C;
+  result.model.D = est.D;
+  result.order = n;
+  result.r = r;
+  result.singular_values = est.singular_values;
+  result.v_sub = v_sub(result.model, data);
+  result.poles = eigenvalues(result.model.A);
+  return result;
+}
+
+Model bilinear_to_continuous(const Model& w_model, const Real& omega_scale) {
+  if (!finite(omega_scale) || !(omega_scale > 0))
+    throw InputError("bilinear_to_continuous: omega_scale = " + fmt(omega_scale) + " is not > 0");
+  const Eigen::Index n = w_model.A.rows();
+  // wI − A_w = (I − A_w)(s̃I − A_c)/(s̃ + 1) with Q = (I − A_w)⁻¹, A_c = Q(I + A_w);
+  // G = D_w + C_w Q B_w + 2 C_w Q (s̃I − A_c)⁻¹ Q B_w (Q commutes with A_c).
+  const MatrixR I = MatrixR::Identity(n, n);
+  MatrixR Q;
+  if (!least_squares(I - w_model.A, I, &Q))
+    throw StepError(4, "I - A_w is singular (an estimated w-domain pole at w = 1, s = infinity)");
+  const Real root2 = sqrt(Real(2));
+  Model model;
+  model.domain = "continuous";
+  model.sample_time = 0;
+  model.A = omega_scale * (Q * (I + w_model.A));  // s = ω_scale s̃
+  model.B = (omega_scale * root2) * (Q * w_model.B);
+  model.C = root2 * (w_model.C * Q);
+  model.D = w_model.D + w_model.C * Q * w_model.B;
+  return model;
+}
+
+MatrixC frequency_response(const Model& model, const Real& omega) {
+  const Eigen::Index n = model.A.rows();
+  if (model.A.cols() != n || model.B.rows() != n || model.C.cols() != n ||
+      model.D.rows() != model.C.rows() || model.D.cols() != model.B.cols())
+    throw InputError("model: inconsistent shapes of A, B, C, D");
+  Complex xi;
+  if (model.domain == "discrete")
+    xi = Complex(cos(omega), sin(omega));
+  else if (model.domain == "continuous")
+    xi = Complex(Real(0), omega);
+  else
+    throw InputError("model: domain \"" + model.domain + "\" is neither discrete nor continuous");
+  MatrixC X;  // (ξI − A)⁻¹B
+  if (!resolvent_solve(model.A, xi, model.B.cast<Complex>(), &X))
+    throw InputError("frequency_response: omega = " + fmt(omega) + " is on a pole of the model");
+  return model.C.cast<Complex>() * X + model.D.cast<Complex>();
+}
+
+Real v_sub(const Model& model, const FrfData& data) {
+  check_data(data);
+  Real sum = 0;
+  for (std::size_t k = 0; k < data.omega.size(); ++k) {
+    const MatrixC E = data.Y[k] - frequency_response(model, data.omega[k]) * data.U[k];
+    for (Eigen::Index i = 0; i < E.rows(); ++i)
+      for (Eigen::Index j = 0; j < E.cols(); ++j) sum += std::norm(E(i, j)) / data.variance[k](i, j);
+  }
+  return sum;
+}
+
+std::vector<std::vector<MatrixC>> period_spectra(const std::vector<std::vector<Real>>& channels,
+                                                 int period, int periods,
+                                                 const std::vector<int>& lines) {
+  if (channels.empty()) throw InputError("period_spectra: no channels");
+  if (period < 2) throw InputError("period_spectra: period = " + std::to_string(period) + " < 2");
+  if (periods < 1) throw InputError("period_spectra: periods = " + std::to_string(periods) + " < 1");
+  const std::size_t length = static_cast<std::size_t>(period) * periods;
+  for (std::size_t ch = 0; ch < channels.size(); ++ch)
+    if (channels[ch].size() != length)
+      throw InputError("period_spectra: channel " + std::to_string(ch) + " has " +
+                       std::to_string(channels[ch].size()) + " samples, periods * period = " +
+                       std::to_string(length));
+  for (std::size_t i = 0; i < lines.size(); ++i)
+    if (lines[i] < 1 || lines[i] > period / 2)
+      throw InputError("period_spectra: line " + std::to_string(lines[i]) + " (entry " +
+                       std::to_string(i) + ") is outside 1 ... period/2 = " + std::to_string(period / 2));
+  const int N = period;
+  std::vector<Complex> root(N);  // e^{−j2πq/N}
+  const Real two_pi = 2 * boost::math::constants::pi<Real>();
+  for (int q = 0; q < N; ++q) {
+    const Real angle = two_pi * Real(q) / Real(N);
+    root[q] = Complex(cos(angle), -sin(angle));
+  }
+  const Real scale = 1 / sqrt(Real(N));
+  std::vector<std::vector<MatrixC>> out(periods, std::vector<MatrixC>(lines.size()));
+  for (int l = 0; l < periods; ++l)
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      MatrixC Z(channels.size(), 1);
+      for (std::size_t ch = 0; ch < channels.size(); ++ch) {
+        Complex sum(0);
+        for (int t = 0; t < N; ++t)
+          sum += channels[ch][static_cast<std::size_t>(l) * N + t] *
+                 root[(static_cast<long long>(lines[i]) * t) % N];
+        Z(ch, 0) = scale * sum;  // Eq. (4)
+      }
+      out[l][i] = Z;
+    }
+  return out;
+}
+
+SampleStatistics sample_statistics(const std::string& domain, const std::vector<Real>& omega,
+                                   const std::vector<std::vector<MatrixC>>& U_l,
+                                   const std::vector<std::vector<MatrixC>>& Y_l) {
+  const int M = static_cast<int>(U_l.size());
+  if (M < 2) throw InputError("sample_statistics: M = " + std::to_string(M) + " experiments, need >= 2");
+  if (Y_l.size() != U_l.size())
+    throw InputError("sample_statistics: " + std::to_string(U_l.size()) + " input and " +
+                     std::to_string(Y_l.size()) + " output experiments");
+  const std::size_t F = omega.size();
+  if (F < 1) throw InputError("sample_statistics: no frequencies");
+  const Eigen::Index m = U_l[0][0].rows(), p = Y_l[0][0].rows();
+  for (int l = 0; l < M; ++l) {
+    if (U_l[l].size() != F || Y_l[l].size() != F)
+      throw InputError("sample_statistics: experiment " + std::to_string(l) + " has " +
+                       std::to_string(U_l[l].size()) + " U and " + std::to_string(Y_l[l].size()) +
+                       " Y spectra, expected " + std::to_string(F));
+    for (std::size_t k = 0; k < F; ++k)
+      if (U_l[l][k].rows() != m || U_l[l][k].cols() != 1 || Y_l[l][k].rows() != p ||
+          Y_l[l][k].cols() != 1)
+        throw InputError("sample_statistics: experiment " + std::to_string(l) + ", " + at(k) +
+                         ": U must be " + std::to_string(m) + "x1 and Y " + std::to_string(p) + "x1");
+  }
+  SampleStatistics st;
+  st.M = M;
+  st.data.domain = domain;
+  st.data.omega = omega;
+  const Real inv_M = 1 / Real(M), inv_M1 = 1 / Real(M - 1);
+  for (std::size_t k = 0; k < F; ++k) {
+    MatrixC U_mean = MatrixC::Zero(m, 1), Y_mean = MatrixC::Zero(p, 1);
+    for (int l = 0; l < M; ++l) {
+      U_mean += U_l[l][k];
+      Y_mean += Y_l[l][k];
+    }
+    U_mean *= Complex(inv_M);  // Eq. (25)
+    Y_mean *= Complex(inv_M);
+    MatrixR var_Y = MatrixR::Zero(p, 1), var_U = MatrixR::Zero(m, 1);
+    MatrixC cov = MatrixC::Zero(p, m);
+    for (int l = 0; l < M; ++l) {
+      const MatrixC dU = U_l[l][k] - U_mean, dY = Y_l[l][k] - Y_mean;
+      for (Eigen::Index i = 0; i < p; ++i) var_Y(i, 0) += std::norm(dY(i, 0));
+      for (Eigen::Index i = 0; i < m; ++i) var_U(i, 0) += std::norm(dU(i, 0));
+      cov += dY * dU.adjoint();  // Eq. (32): (Y − Ŷ) conj(U − Û)
+    }
+    st.data.U.push_back(U_mean);
+    st.data.Y.push_back(Y_mean);
+    st.data.variance.push_back(var_Y * (inv_M1 * inv_M));  // σ̂²_Y / M
+    st.var_U.push_back(var_U * inv_M1);
+    st.cov_YU.push_back(cov * Complex(inv_M1));
+  }
+  return st;
+}
+
+FrfData errors_in_variables(const SampleStatistics& stats) {
+  const FrfData& d = stats.data;
+  if (stats.M < 2) throw InputError("errors_in_variables: M = " + std::to_string(stats.M) + " < 2");
+  const std::size_t F = d.omega.size();
+  if (d.U.size() != F || d.Y.size() != F || d.variance.size() != F || stats.var_U.size() != F ||
+      stats.cov_YU.size() != F)
+    throw InputError("errors_in_variables: sizes of U, Y, variance, var_U, cov_YU differ from F");
+  FrfData out;
+  out.domain = d.domain;
+  out.omega = d.omega;
+  const Real M = Real(stats.M);
+  for (std::size_t k = 0; k < F; ++k) {
+    if (d.U[k].rows() != 1 || d.U[k].cols() != 1 || d.Y[k].rows() != 1 || d.Y[k].cols() != 1 ||
+        stats.var_U[k].size() != 1 || stats.cov_YU[k].size() != 1 || d.variance[k].size() != 1)
+      throw InputError("errors_in_variables: " + at(k) + ": only SISO (m = p = 1, c = 1) data");
+    const Complex U = d.U[k](0, 0), Y = d.Y[k](0, 0);
+    if (std::norm(U) == 0) throw InputError("errors_in_variables: mean input is zero at " + at(k));
+    const Complex G = Y / U;
+    const Real var_Y = d.variance[k](0, 0) * M;  // σ̂²_Y (data holds σ̂²_Y / M)
+    const Real& var_U = stats.var_U[k](0, 0);
+    const Complex& cov = stats.cov_YU[k](0, 0);
+    // Eq. (31), corrected: |G|²(σ²_Y/|Y|² + σ²_U/|U|² − 2Re(σ²_YU/(Y conj U))); since
+    // |G|²/(Y conj U) = conj(G)/|U|², this equals the form below, also valid at Y = 0.
+    const Real var_G =
+        (var_Y + std::norm(G) * var_U - 2 * (std::conj(G) * cov).real()) / std::norm(U);
+    out.U.push_back(MatrixC::Constant(1, 1, Complex(1)));
+    out.Y.push_back(MatrixC::Constant(1, 1, G));
+    out.variance.push_back(MatrixR::Constant(1, 1, var_G / M));
+  }
+  return out;
+}
+
+}  // namespace fdsid::reference
