@@ -124,19 +124,21 @@ void check_readable_file(const std::string& path, const char* what) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) input_error(path, std::string("is a directory, not a ") + what);
 }
-}  // namespace
 
-StateSpace read_model(const std::string& path) {
-  check_readable_file(path, "model file");
+nlohmann::json read_json_file(const std::string& path, const char* what) {
+  check_readable_file(path, what);
   std::ifstream f(path);
-  if (!f) input_error(path, "cannot open model file");
-  nlohmann::json j;
+  if (!f) input_error(path, std::string("cannot open ") + what);
   try {
-    j = nlohmann::json::parse(f);
+    return nlohmann::json::parse(f);
   } catch (const nlohmann::json::parse_error& e) {
     input_error(path, std::string("malformed JSON: ") + e.what());
   }
-  return model_from_json(j, path);
+}
+}  // namespace
+
+StateSpace read_model(const std::string& path) {
+  return model_from_json(read_json_file(path, "model file"), path);
 }
 
 nlohmann::json model_to_json(const StateSpace& m) {
@@ -384,16 +386,7 @@ RecordMeta meta_from_json(const nlohmann::json& j, const std::string& where) {
 }
 
 RecordMeta read_meta(const std::string& path) {
-  check_readable_file(path, "meta file");
-  std::ifstream f(path);
-  if (!f) input_error(path, "cannot open meta file");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(f);
-  } catch (const nlohmann::json::parse_error& e) {
-    input_error(path, std::string("malformed JSON: ") + e.what());
-  }
-  return meta_from_json(j, path);
+  return meta_from_json(read_json_file(path, "meta file"), path);
 }
 
 nlohmann::json frf_result_to_json(const FrfResult& r, const std::string& method) {
