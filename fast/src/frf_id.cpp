@@ -220,6 +220,7 @@ struct Step1 {
   Eigen::MatrixXd L;       // C_Y = L Lᵀ
   Eigen::MatrixXd Usvd;    // left singular vectors of L⁻¹ R22ᵀ
   Eigen::VectorXd sigma;   // its singular values
+  double r11_condition = 1; // cond₂(R11): conditioning of the input part (Π of Eq. 20)
 };
 
 Step1 step1(const FrfData& d, const Bases& b, int r) {
@@ -259,6 +260,8 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
          "the input data matrix U^re is rank deficient (min |R11_ii| / max = " + fmt(r11.minCoeff() / r11max, 3) +
              "): the input does not excite r = " + std::to_string(r) +
              " basis functions (Pintelon 2002 Assumption 3); use fewer r or more excited lines");
+  const Eigen::VectorXd r11sv =
+      Eigen::JacobiSVD<Eigen::MatrixXd>(R.topLeftCorner(nu, nu)).singularValues();
   const Eigen::MatrixXd R22t = R.bottomRightCorner(ny, ny).transpose();
   // Step 1c. C_Y = Σ Re((W_y W_yᴴ) ⊗ diag σ²): entry ((i,a),(i',a')) is
   // δ_{aa'} Σ_{k,j} Re(W_i conj W_i') σ²_a(k, j).
@@ -283,6 +286,7 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(K, Eigen::ComputeFullU);
   s.Usvd = svd.matrixU();
   s.sigma = svd.singularValues();
+  s.r11_condition = r11sv(0) / r11sv(nu - 1);
   return s;
 }
 
@@ -551,7 +555,9 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
   // First-order sensitivity of Â to rounding: the subspace of step 1c moves
   // by ~u σ_1/σ_n (Wedin), and the least-squares solve of step 2 multiplies
   // that by cond(Ô_top).
-  res.condition = (s1.sigma(0) / s1.sigma(n - 1)) * (top_sv(0) / top_sv(n - 1));
+  // The projection Π of Eq. (20) amplifies perturbations of the input rows by
+  // cond(R11) = cond(𝐔^re) (narrow-band or short grids make it large).
+  res.condition = (s1.sigma(0) / s1.sigma(n - 1)) * (top_sv(0) / top_sv(n - 1)) * s1.r11_condition;
   res.error_estimate = kUnitRoundoff * res.condition;
   res.v_sub = v_sub(est, d);
   res.poles = poles(est);

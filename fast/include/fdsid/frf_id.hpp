@@ -76,11 +76,13 @@ struct FrfResult {
   /// V_SUB for every r tried (empty when r was given).
   std::vector<std::pair<int, double>> r_scan;
   Eigen::VectorXcd poles;
-  /// κ = (σ_1/σ_n of step 1c) · cond(Ô_r[1:r−1]) of step 2: the first-order
-  /// amplification of rounding errors into Â.
+  /// κ = (σ_1/σ_n of step 1c) · cond(Ô_r[1:r−1]) of step 2 · cond(R11) of
+  /// step 1b: the first-order amplification of rounding errors into Â.
   double condition = 0;
-  /// u · κ: the relative accuracy of Â (and the poles) that double precision
-  /// can promise on noise-free data. Tests and `check` scale tolerances by it.
+  /// u · κ: a first-order estimate of the relative rounding error of Â (and
+  /// the poles) on noise-free data; tests scale tolerances by it. An estimate,
+  /// not a proven bound (cond(R11) was added after a narrow-band grid, n = 1,
+  /// showed errors 1e6 × u with the first two factors alone).
   double error_estimate = 0;
   /// Noise level of step 1c's squared singular values (Marchenko–Pastur edge of
   /// whitened noise) used by the automatic order selection; 0 when unused.
@@ -196,7 +198,10 @@ SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, c
 /// `dropped`. When `first_pass` is given, the variance is evaluated at that
 /// model's G₁ instead of the noisy Ĝ:
 /// σ²_G = (σ̂²_Y + |G₁|² σ̂²_U − 2 Re(conj(G₁) σ̂_YU)) / (M |Û|²), which removes
-/// the correlation between Ĝ and its weight (the bias that does not vanish as F grows).
+/// the correlation of the weight with Ŷ. Measured (tests/frf_id_test.cpp): it
+/// halves the bias of the Ĝ-based weight, but |Û|² in the denominator still
+/// correlates with Ĝ = Ŷ/Û, leaving a relative bias ≈ −σ²_U/(M|U₀|²) that does
+/// not vanish as F grows (−1.6e-3 at an input SNR of 600). Open.
 FrfData errors_in_variables(const SampleStatistics& stats, const StateSpace* first_pass = nullptr,
                             double min_input_snr = 10.0, int* dropped = nullptr);
 

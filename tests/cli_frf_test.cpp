@@ -1,0 +1,458 @@
+// Command-line tests of fdsid identify-frf, simulate-records and reproduce
+// fig1/fig2 (Pintelon 2002). Same harness as cli_test.cpp (run_fdsid forks and
+// execs FDSID_EXE with a time limit; IsBadInput checks exit status 2 and one
+// stderr line "fdsid: ..." naming the problem). Input files are written at test
+// time into a fresh temporary folder that the fixture removes afterwards.
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <complex>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <initializer_list>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "cli_harness.hpp"
+
+#include <Eigen/Dense>
+
+#include "fdsid/frf_id.hpp"
+#include "fdsid/model.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+using namespace fdsid::cli_harness;
+
+
+
+/// Replaces line number `lineno` (1-based, header = line 1) of text.
+std::string replace_line(const std::string& text, int lineno, const std::string& replacement) {
+  std::istringstream in(text);
+  std::string line, out;
+  for (int i = 1; std::getline(in, line); ++i) out += (i == lineno ? replacement : line) + "\n";
+  return out;
+}
+
+// ---------------------------------------------------------------------------
+// Systems and files
+
+constexpr double kU = 0x1p-53;  // unit roundoff of double
+
+/// Pintelon (2002) Eq. (36) plant (McKelvey et al. 1996) as decimal strings.
+const char* kPintelonModel = R"({"domain": "discrete", "sample_time": 1.0,
+  "A": [["0.8876", "0.4494", "0", "0"], ["-0.4494", "0.7978", "0", "0"],
+        ["0", "0", "-0.6129", "0.064516"], ["0", "0", "-6.4516", "-0.7419"]],
+  "B": [["0.2247"], ["0.8989"], ["0.0323"], ["0.1290"]],
+  "C": [["0.4719", "0.1124", "9.6774", "1.6129"]],
+  "D": [["0.9626"]]})";
+
+fdsid::StateSpace pintelon_plant() {
+  fdsid::StateSpace s;
+  s.A.resize(4, 4);
+  s.A << 0.8876, 0.4494, 0, 0, -0.4494, 0.7978, 0, 0, 0, 0, -0.6129, 0.064516, 0, 0, -6.4516, -0.7419;
+  s.B.resize(4, 1);
+  s.B << 0.2247, 0.8989, 0.0323, 0.1290;
+  s.C.resize(1, 4);
+  s.C << 0.4719, 0.1124, 9.6774, 1.6129;
+  s.D = Eigen::MatrixXd::Constant(1, 1, 0.9626);
+  return s;
+}
+
+/// A continuous fourth-order plant (rad/s): two lightly damped modes,
+/// ω₀ = 1 (ζ = 0.1) and ω₀ = 10 (ζ = 0.3); poles −0.1 ± 0.995j, −3 ± 9.54j.
+fdsid::StateSpace continuous_plant() {
+  fdsid::StateSpace s;
+  s.domain = fdsid::Domain::Continuous;
+  s.sample_time = 0;
+  s.A.resize(4, 4);
+  s.A << 0, 1, 0, 0, -1, -0.2, 0, 0, 0, 0, 0, 1, 0, 0, -100, -6;
+  s.B.resize(4, 1);
+  s.B << 0, 1, 0, 1;
+  s.C.resize(1, 4);
+  s.C << 1, 0.5, 100, 2;
+  s.D = Eigen::MatrixXd::Constant(1, 1, 0.1);
+  return s;
+}
+
+std::complex<double> G_at(const fdsid::StateSpace& s, std::complex<double> xi) {
+  const Eigen::Index n = s.A.rows();
+  const Eigen::MatrixXcd R = (xi * Eigen::MatrixXcd::Identity(n, n) - s.A.cast<std::complex<double>>()).inverse();
+  return (s.C.cast<std::complex<double>>() * R * s.B.cast<std::complex<double>>())(0, 0) + s.D(0, 0);
+}
+
+/// Eigenvalue condition of A: κ₂(V) of its eigenvector matrix (the Bauer–Fike
+/// amplification of a perturbation of A into its eigenvalues).
+double eigen_condition(const Eigen::MatrixXd& A) {
+  Eigen::EigenSolver<Eigen::MatrixXd> es(A);
+  const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXcd>(es.eigenvectors()).singularValues();
+  return s(0) / s(s.size() - 1);
+}
+
+/// Largest distance from a true pole to the nearest identified pole in the JSON
+/// (numbers, or decimal strings with --precision high).
+double pole_distance(const Eigen::MatrixXd& A_true, const json& poles) {
+  const Eigen::VectorXcd truth = Eigen::EigenSolver<Eigen::MatrixXd>(A_true).eigenvalues();
+  auto num = [](const json& v) { return v.is_string() ? std::stod(v.get<std::string>()) : v.get<double>(); };
+  double worst = 0;
+  for (Eigen::Index i = 0; i < truth.size(); ++i) {
+    double best = INFINITY;
+    for (const auto& p : poles) best = std::min(best, std::abs(std::complex<double>(num(p[0]), num(p[1])) - truth(i)));
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+
+/// Significant digits of a decimal string ("-1.2345e-3" → 5).
+int significant_digits(const std::string& s) {
+  std::string mant = s.substr(0, s.find_first_of("eE"));
+  std::string digits;
+  for (char ch : mant)
+    if (std::isdigit(static_cast<unsigned char>(ch))) digits += ch;
+  const size_t first = digits.find_first_not_of('0');
+  return first == std::string::npos ? 0 : static_cast<int>(digits.size() - first);
+}
+
+std::string frf_csv(const fdsid::StateSpace& s, const std::vector<double>& omega, double var) {
+  std::string text = "omega,G_re,G_im,G_var\n";
+  char line[160];
+  for (double w : omega) {
+    const std::complex<double> xi =
+        s.domain == fdsid::Domain::Discrete ? std::polar(1.0, w) : std::complex<double>(0.0, w);
+    const auto g = G_at(s, xi);
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,%.17g\n", w, g.real(), g.imag(), var);
+    text += line;
+  }
+  return text;
+}
+
+class CliFrf : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    static std::atomic<int> counter{0};
+    std::random_device rd;
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / ("fdsid-clifrf-" + std::string(info->name()) + "-" +
+                                        std::to_string(getpid()) + "-" + std::to_string(counter++) + "-" +
+                                        std::to_string(rd()));
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  std::string write(const std::string& name, const std::string& text) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p, std::ios::binary) << text;
+    return p.string();
+  }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  json read_json(const std::string& name) {
+    std::ifstream f(path(name));
+    return json::parse(f);
+  }
+
+  /// simulate-records on the Pintelon plant: P samples per period, M periods,
+  /// lines 1, 3, ..., P/2 − 1, white output noise of std `noise`.
+  void simulate(int P, int M, double noise, const std::string& stem, int seed = 7) {
+    const std::string model = write("plant.json", kPintelonModel);
+    std::vector<std::string> args = {"simulate-records", "--model", model, "--out", path(stem + ".csv"),
+                                     "--meta-out", path(stem + ".meta.json"), "--period", std::to_string(P),
+                                     "--periods", std::to_string(M), "--seed", std::to_string(seed), "--lines"};
+    for (int k = 1; k <= P / 2 - 1; k += 2) args.push_back(std::to_string(k));
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", noise);
+    args.insert(args.end(), {"--noise-std", buf});
+    ASSERT_TRUE(Succeeded(run_fdsid(args)));
+  }
+
+  /// A 3-row FRF file of the Pintelon plant whose row 2 (file line 3) is `row`.
+  std::string frf_with_row(const std::string& name, const std::string& row) {
+    std::string text = frf_csv(pintelon_plant(), {0.5, 1.0, 1.5}, 1e-6);
+    return write(name, replace_line(text, 3, row));
+  }
+
+  fs::path dir_;
+};
+
+void expect_contract_fields(const json& j, const std::string& domain, const std::string& method) {
+  for (const char* key : {"A", "B", "C", "D", "domain", "sample_time", "order", "method", "singular_values", "poles"})
+    EXPECT_TRUE(j.contains(key)) << "missing \"" << key << "\" in " << j.dump().substr(0, 400);
+  EXPECT_EQ(j["domain"], domain);
+  EXPECT_EQ(j["method"], method);
+  EXPECT_EQ(j["order"], 4);
+  ASSERT_EQ(j["A"].size(), 4u);
+  for (const auto& row : j["A"]) EXPECT_EQ(row.size(), 4u);
+  ASSERT_EQ(j["B"].size(), 4u);
+  EXPECT_EQ(j["B"][0].size(), 1u);
+  ASSERT_EQ(j["C"].size(), 1u);
+  EXPECT_EQ(j["C"][0].size(), 4u);
+  ASSERT_EQ(j["D"].size(), 1u);
+  EXPECT_EQ(j["poles"].size(), 4u);
+  EXPECT_GE(j["singular_values"].size(), 5u);  // r p = 8 ≥ n + 1: the gap after σ_4 is visible
+}
+
+// ---------------------------------------------------------------------------
+// Periodic records → identify-frf
+
+// Pole tolerance for noisy records (first-order perturbation, stated constants):
+// output noise of std σ_n per sample is, under the 1/√P DFT of Eq. (4), noise of
+// E|N(k)|² = σ_n² per period at each excited line, σ_n²/M after the mean over M
+// periods. |U(k)| = rms √(P / (2L)) for an RMS-1 multisine on L lines. The
+// largest of 2F real Gaussian components is below 5 standard deviations (tail
+// e^{−12.5}·2F ≈ 2e-4 for F = 32), so the relative data error is
+// ε_data ≤ 5 σ_n / (√M |U| min_k |G(e^{jω_k})|). The diagnostics' κ (first-order
+// amplification of relative data errors into Â) and the Bauer–Fike factor
+// κ₂(V) of the true A map it to the poles: |δλ| ≤ c κ κ₂(V) ‖A‖₂ ε_data with
+// c = 10 for the second-order terms and the norm-equivalence factors (n = 4).
+TEST_F(CliFrf, SimulatedRecordsIdentifyThePlant) {
+  const int P = 128, M = 8, L = 32;
+  const double noise = 1e-6;
+  simulate(P, M, noise, "rec");
+  const RunResult r = run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
+                                 "--order", "4", "--r", "8", "--json", path("out.json")});
+  ASSERT_TRUE(Succeeded(r));
+  const json j = read_json("out.json");
+  expect_contract_fields(j, "discrete", "pintelon2002-alg1");
+  EXPECT_EQ(j["sample_time"], 1.0);
+
+  const fdsid::StateSpace plant = pintelon_plant();
+  double gmin = INFINITY;
+  for (int k = 1; k < P / 2; k += 2) gmin = std::min(gmin, std::abs(G_at(plant, std::polar(1.0, 2 * M_PI * k / P))));
+  const double U = std::sqrt(P / (2.0 * L));
+  const double eps_data = 5 * noise / (std::sqrt(double(M)) * U * gmin);
+  const double kappa = j["diagnostics"]["condition"].get<double>();
+  const double tol = 10 * kappa * eigen_condition(plant.A) * plant.A.operatorNorm() * eps_data;
+  const double err = pole_distance(plant.A, j["poles"]);
+  EXPECT_LE(err, tol) << "kappa " << kappa << ", eps_data " << eps_data;
+  std::printf("records: pole error %.3g, tolerance %.3g (kappa %.3g, eps_data %.3g)\n", err, tol, kappa, eps_data);
+}
+
+// --precision high: the 50-digit reference on the same records; every number a
+// decimal string of ≥ 30 significant digits; poles within the same noise
+// tolerance as above (the estimator is the same, rounding is negligible).
+TEST_F(CliFrf, SimulatedRecordsHighPrecision) {
+  const int P = 64, M = 6, L = 16;
+  const double noise = 1e-6;
+  simulate(P, M, noise, "rec");
+  const RunResult r = run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
+                                 "--order", "4", "--r", "8", "--precision", "high", "--json", path("out.json")},
+                                600);
+  ASSERT_TRUE(Succeeded(r));
+  const json j = read_json("out.json");
+  expect_contract_fields(j, "discrete", j["method"].get<std::string>());
+  for (const char* key : {"A", "B", "C", "D", "poles"})
+    for (const auto& row : j[key])
+      for (const auto& v : row) {
+        ASSERT_TRUE(v.is_string()) << key << " entry " << v.dump() << " is not a decimal string";
+        const std::string s = v.get<std::string>();
+        // An exact zero (e.g. the imaginary part of a real pole) has no significant digits to carry.
+        if (std::stod(s) != 0.0) {
+          EXPECT_GE(significant_digits(s), 30) << key << " entry " << s;
+        }
+      }
+  const fdsid::StateSpace plant = pintelon_plant();
+  double gmin = INFINITY;
+  for (int k = 1; k < P / 2; k += 2) gmin = std::min(gmin, std::abs(G_at(plant, std::polar(1.0, 2 * M_PI * k / P))));
+  const double eps_data = 5 * noise / (std::sqrt(double(M)) * std::sqrt(P / (2.0 * L)) * gmin);
+  // κ of the same data from the double-precision run.
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
+                                   "--order", "4", "--r", "8", "--json", path("double.json")})));
+  const double kappa = read_json("double.json")["diagnostics"]["condition"].get<double>();
+  const double tol = 10 * kappa * eigen_condition(plant.A) * plant.A.operatorNorm() * eps_data;
+  const double err = pole_distance(plant.A, j["poles"]);
+  EXPECT_LE(err, tol);
+  std::printf("records (high): pole error %.3g, tolerance %.3g\n", err, tol);
+}
+
+// ---------------------------------------------------------------------------
+// FRF files → identify-frf
+//
+// Noise-free FRF (only the %.17g rounding of the CSV, relative u): the estimate
+// is exact up to rounding, and the diagnostics' error_estimate = u κ bounds the
+// relative error of Â; Bauer–Fike gives |δλ| ≤ c · error_estimate · κ₂(V) ‖A‖₂
+// with c = 100 (the CSV rounding, the %.17g JSON output and O(n) rounding in
+// the eigenvalue solve, each a few u relative, for n = 4).
+void expect_exact_poles(const fdsid::StateSpace& plant, const json& j) {
+  const double est = j["diagnostics"]["error_estimate"].get<double>();
+  ASSERT_GT(est, 0);
+  EXPECT_GE(est, kU);
+  const double tol = 100 * est * eigen_condition(plant.A) * plant.A.operatorNorm();
+  const double err = pole_distance(plant.A, j["poles"]);
+  EXPECT_LE(err, tol) << "error_estimate " << est;
+  std::printf("frf: pole error %.3g, tolerance %.3g (error_estimate %.3g)\n", err, tol, est);
+}
+
+TEST_F(CliFrf, DiscreteFrfFile) {
+  std::vector<double> omega;
+  for (int k = 0; k < 80; ++k) omega.push_back(M_PI * (k + 0.5) / 80);
+  const std::string f = write("g.csv", frf_csv(pintelon_plant(), omega, 1e-8));
+  const RunResult r = run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--r", "8", "--json", path("out.json")});
+  ASSERT_TRUE(Succeeded(r));
+  const json j = read_json("out.json");
+  expect_contract_fields(j, "discrete", "pintelon2002-alg1");
+  expect_exact_poles(pintelon_plant(), j);
+}
+
+TEST_F(CliFrf, ContinuousFrfBilinearAndOrthogonal) {
+  std::vector<double> omega;
+  for (int k = 0; k < 60; ++k) omega.push_back(0.1 * std::pow(1000.0, k / 59.0));  // 0.1 … 100 rad/s
+  const fdsid::StateSpace plant = continuous_plant();
+  const std::string f = write("g.csv", frf_csv(plant, omega, 1e-8));
+  for (const std::string method : {"bilinear", "orthogonal"}) {
+    SCOPED_TRACE(method);
+    const std::string out = path(method + ".json");
+    const RunResult r = run_fdsid({"identify-frf", "--frf", f, "--domain", "continuous", "--method", method,
+                                   "--order", "4", "--r", "8", "--json", out});
+    ASSERT_TRUE(Succeeded(r));
+    const json j = read_json(method + ".json");
+    expect_contract_fields(j, "continuous", "pintelon2002-alg2-" + method);
+    expect_exact_poles(plant, j);
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Bad input: exit 2, one stderr line naming the problem
+
+TEST_F(CliFrf, TooFewPeriods) {
+  simulate(16, 3, 1e-3, "rec");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
+                                    "--order", "2"}),
+                         {"periods", "M >= 4"}));
+}
+
+TEST_F(CliFrf, RecordNotWholePeriods) {
+  simulate(16, 5, 1e-3, "rec");
+  std::ifstream in(path("rec.csv"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.erase(text.rfind('\n', text.size() - 2) + 1);  // drop the last sample
+  const std::string f = write("short.csv", text);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", f, "--meta", path("rec.meta.json"), "--order", "2"}),
+                         {"79 samples", "whole periods"}));
+}
+
+TEST_F(CliFrf, NoExcitedLines) {
+  simulate(16, 5, 1e-3, "rec");
+  const std::string meta = write("m.json", R"({"period": 16, "periods": 5, "sample_time": 1, "excited_lines": []})");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", meta, "--order", "2"}),
+                         {meta, "excited_lines", "no excited lines"}));
+}
+
+TEST_F(CliFrf, ExcitedLineAboveHalfPeriod) {
+  simulate(16, 5, 1e-3, "rec");
+  const std::string meta = write("m.json", R"({"period": 16, "periods": 5, "sample_time": 1, "excited_lines": [1, 3, 9]})");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", meta, "--order", "2"}),
+                         {meta, "excited_lines", "line 9", "P/2 = 8"}));
+}
+
+TEST_F(CliFrf, ZeroOrNegativeVariance) {
+  for (const std::string v : {"0", "-1e-3"}) {
+    const std::string f = frf_with_row("var" + v + ".csv", "1,0.5,0.25," + v);
+    EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "1"}), {f, "line 3", "G_var", "positive"}));
+  }
+}
+
+TEST_F(CliFrf, RepeatedFrequency) {
+  const std::string f = frf_with_row("rep.csv", "0.5,0.5,0.25,1e-6");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "1"}), {f, "repeats frequency"}));
+}
+
+TEST_F(CliFrf, DiscreteOmegaAbovePi) {
+  const std::string f = frf_with_row("pi.csv", "3.2,0.5,0.25,1e-6");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "1"}), {f, "3.2", "outside [0, pi]"}));
+}
+
+TEST_F(CliFrf, ContinuousOmegaNotPositive) {
+  for (const std::string w : {"0", "-1"}) {
+    const std::string f = frf_with_row("w" + w + ".csv", w + ",0.5,0.25,1e-6");
+    EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--domain", "continuous", "--order", "1"}),
+                           {f, "positive for continuous time"}));
+  }
+}
+
+TEST_F(CliFrf, MissingFiles) {
+  const std::string missing = path("missing.csv");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", missing, "--order", "1"}), {missing, "cannot open"}));
+  simulate(16, 5, 1e-3, "rec");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", missing, "--meta", path("rec.meta.json")}),
+                         {missing, "cannot open"}));
+  const std::string missing_meta = path("missing.json");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", missing_meta}),
+                         {missing_meta, "cannot open"}));
+}
+
+TEST_F(CliFrf, MalformedMetaJson) {
+  simulate(16, 5, 1e-3, "rec");
+  const std::string meta = write("bad.json", "{\"period\": 16, \"periods\": 5,\n \"excited_lines\": [1, 3\n}\n");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", meta}),
+                         {meta, "malformed JSON"}));
+}
+
+TEST_F(CliFrf, BothOrNeitherSource) {
+  simulate(16, 5, 1e-3, "rec");
+  const std::string f = write("g.csv", frf_csv(pintelon_plant(), {0.5, 1.0, 1.5}, 1e-6));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--data", path("rec.csv"), "--meta",
+                                    path("rec.meta.json")}),
+                         {"--frf", "--data"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--order", "1"}), {"--frf", "--data"}));
+}
+
+TEST_F(CliFrf, RNotAboveOrder) {
+  std::vector<double> omega;
+  for (int k = 0; k < 40; ++k) omega.push_back(M_PI * (k + 0.5) / 40);
+  const std::string f = write("g.csv", frf_csv(pintelon_plant(), omega, 1e-8));
+  for (const std::string r : {"4", "3"})
+    EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--r", r}),
+                           {"r = " + r, "must exceed the order"}));
+}
+
+TEST_F(CliFrf, NanInCsv) {
+  const std::string f = frf_with_row("nan.csv", "1,nan,0.25,1e-6");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "1"}), {f, "line 3", "G_re", "not finite"}));
+  const std::string g = frf_with_row("nanvar.csv", "1,0.5,0.25,NaN");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", g, "--order", "1"}), {g, "line 3", "G_var"}));
+}
+
+// ---------------------------------------------------------------------------
+// reproduce fig1 / fig2
+
+TEST_F(CliFrf, ReproduceFiguresJsonToStdout) {
+  for (const std::string fig : {"fig1", "fig2"}) {
+    SCOPED_TRACE(fig);
+    const RunResult r = run_fdsid({"reproduce", fig, "--runs", "50", "--json", "-"}, 300);
+    ASSERT_TRUE(Succeeded(r));
+    json j;
+    ASSERT_NO_THROW(j = json::parse(r.out)) << "stdout is not JSON only: " << r.out.substr(0, 300);
+    ASSERT_TRUE(j.contains("frequency") && j.contains("ratio") && j.contains("bound"));
+    EXPECT_EQ(j["frequency"].size(), 999u);
+    EXPECT_EQ(j["ratio"].size(), 999u);
+    EXPECT_DOUBLE_EQ(j["frequency"][0].get<double>(), 1.0 / 2000);
+    EXPECT_DOUBLE_EQ(j["frequency"][998].get<double>(), 999.0 / 2000);
+    // Eq. (30) with M = 7: √(5/4), to the rounding of one sqrt and one division (2u).
+    EXPECT_NEAR(j["bound"].get<double>(), std::sqrt(5.0 / 4.0), 2 * kU * std::sqrt(5.0 / 4.0));
+    EXPECT_EQ(j["M"], 7);
+    EXPECT_EQ(j["order"], fig == "fig1" ? 4 : 1);
+    for (const auto& v : j["ratio"]) EXPECT_GT(v.get<double>(), 0);
+  }
+}
+
+}  // namespace
