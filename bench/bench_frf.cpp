@@ -108,6 +108,23 @@ void sizes(benchmark::internal::Benchmark* b) {
     for (int r : {8, 40}) b->Args({F, r});
 }
 
+// Throughput of `fdsid reproduce fig1`: Section 6.1's Monte Carlo (F = 999,
+// M = 7, r = 8, n_a = 4; per run two identifications and β̂(α₀)) with
+// state.range(0) threads. Counter runs_per_s; the paper's N_r = 10⁴ takes
+// 10⁴ / runs_per_s seconds.
+void BM_Figure1Runs(benchmark::State& state) {
+  fdsid::FigureOptions o;
+  o.runs = 200;
+  o.threads = static_cast<int>(state.range(0));
+  for (auto _ : state) {
+    const fdsid::FigureResult r = fdsid::reproduce_pintelon_figure(o);
+    benchmark::DoNotOptimize(r.median_ratio);
+  }
+  state.counters["runs_per_s"] =
+      benchmark::Counter(static_cast<double>(state.iterations()) * o.runs, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Figure1Runs)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(2);
+
 BENCHMARK(BM_IdentifyFrf)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
 BENCHMARK(BM_Step1)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
 BENCHMARK(BM_PlainQR)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <initializer_list>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -42,6 +44,24 @@ struct Out {
     return *this;
   }
 };
+
+// "Nothing lost": an output may not be one of the command's inputs (it would be
+// replaced by the result, or half-written on a failure). Compared as files when
+// both exist, else by their normalised paths.
+void refuse_overwrite(const std::string& output, std::initializer_list<std::string> inputs, const char* option) {
+  if (output.empty() || output == "-") return;
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  for (const std::string& in : inputs) {
+    if (in.empty()) continue;
+    const bool same = fs::exists(output, ec) && fs::exists(in, ec) ? fs::equivalent(output, in, ec)
+                                                                   : fs::weakly_canonical(output, ec) ==
+                                                                         fs::weakly_canonical(in, ec);
+    if (same)
+      throw fdsid::Error(fdsid::ErrorKind::Input, option,
+                         "\"" + output + "\" is also an input of this command; refusing to overwrite it");
+  }
+}
 
 fdsid::Extension parse_extension(const std::string& s) {
   if (s == "hermitian-part") return fdsid::Extension::HermitianPart;
@@ -156,6 +176,7 @@ int run_identify_spectrum(const std::string& json_path, const std::string& data_
   for (const auto& z : fdsid::poles(res.model)) out << "  " << z.real() << (z.imag() < 0 ? "" : "+") << z.imag() << "i";
   out << "\nRiccati: " << res.riccati_method << ", " << res.riccati_iterations << " iterations, residual "
       << sci(res.riccati_residual, 1) << "\n";
+  for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
   emit_json(json_path, j);
   return 0;
 }
@@ -339,6 +360,7 @@ int run_identify_frf(const std::string& json_path, const FrfCommand& c) {
   print_poles(out, res.poles);
   out << "V_SUB = " << sci(res.v_sub) << " (Eq. 35; about F when model and noise model are right, F (M-1)/(M-2) with sample variances)\n";
   if (c.improper) out << "the model is the inverse system 1/G (improper G, Pintelon 2002 Section 5)\n";
+  for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
   emit_json(json_path, j);
   return 0;
 }
@@ -423,7 +445,7 @@ int main(int argc, char** argv) {
   t2->add_option("--extension", t2_ext, "step 1 reading: conjugate (default: reproduces the paper) or hermitian-part");
   t2->add_option("--noise-variance", t2_noise, "unit-complex (E|v|^2 = 1, default) or unit-per-component (E|v|^2 = 2)");
   t2->add_option("--vo-epsilon", t2o.vo_epsilon, "noise level of the vo1997 runs (paper: 1e-9; 0 skips them)");
-  t2->add_option("--M", t2o.Ms, "data lengths (default 1000 2000 4000 8000 16000 32000)");
+  t2->add_option("--M", t2o.Ms, "data lengths (default 1000 2000 4000 8000 16000 32000)")->check(CLI::Range(1, 10000000));
 
   fdsid::FigureOptions figo;
   CLI::App* figs[2];
@@ -540,6 +562,14 @@ int main(int argc, char** argv) {
     for (const CLI::App* sub : {t1, t2, ids, chk, idf, figs[0], figs[1]})
       if (sub->parsed() && sub->count("--json") > 0 && json_path.empty())
         throw fdsid::Error(fdsid::ErrorKind::Input, "--json", "empty path (use - for stdout)");
+    if (ids->parsed()) refuse_overwrite(json_path, {data_path}, "--json");
+    if (chk->parsed()) refuse_overwrite(json_path, {model_path, data_path}, "--json");
+    if (idf->parsed()) refuse_overwrite(json_path, {frf.frf_path, frf.data_path, frf.meta_path}, "--json");
+    if (smp->parsed()) refuse_overwrite(out_path, {model_path}, "--out");
+    if (sim->parsed()) {
+      refuse_overwrite(rec_out, {rec_model}, "--out");
+      refuse_overwrite(rec_meta, {rec_model}, "--meta-out");
+    }
     if (t1->parsed()) return run_table1(json_path);
     if (figs[0]->parsed()) return run_figure(json_path, 1, figo);
     if (figs[1]->parsed()) return run_figure(json_path, 2, figo);

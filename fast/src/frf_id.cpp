@@ -19,6 +19,8 @@ namespace fdsid {
 namespace {
 
 constexpr double kUnitRoundoff = std::numeric_limits<double>::epsilon() / 2;
+// Largest number of rows r (m + p) of Z that step 1 attempts.
+constexpr int kMaxColumns = 4000;
 
 std::string fmt(double x, int digits = 6) {
   std::ostringstream s;
@@ -74,6 +76,15 @@ class Resolvent {
   Eigen::VectorXcd lambda_;
   Eigen::MatrixXcd CV_, Vinv_;
 };
+
+// cond₁(R) = ‖R‖₁ ‖R⁻¹‖₁ of an upper-triangular R (within a factor of its
+// size of cond₂; O(n³/3) by one triangular inverse instead of an SVD).
+double triangular_condition(const Eigen::MatrixXd& Rfull) {
+  const Eigen::Index n = Rfull.rows();
+  const Eigen::MatrixXd R = Rfull.triangularView<Eigen::Upper>();
+  const Eigen::MatrixXd Rinv = R.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(n, n));
+  return R.cwiseAbs().colwise().sum().maxCoeff() * Rinv.cwiseAbs().colwise().sum().maxCoeff();
+}
 
 // ---------------------------------------------------------------------------
 // Chunked Householder QR (TSQR). Rows come in groups (one group per frequency):
@@ -220,12 +231,21 @@ struct Step1 {
   Eigen::MatrixXd L;       // C_Y = L Lᵀ
   Eigen::MatrixXd Usvd;    // left singular vectors of L⁻¹ R22ᵀ
   Eigen::VectorXd sigma;   // its singular values
-  double r11_condition = 1; // cond₂(R11): conditioning of the input part (Π of Eq. 20)
+  double r11_condition = 1; // cond₁(R11): conditioning of the input part (Π of Eq. 20)
+  double noise_scale = 0;   // ‖L⁻¹‖₁ ‖R‖_F: rounding of the QR of all of Z, whitened
 };
 
 Step1 step1(const FrfData& d, const Bases& b, int r) {
   const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
   const int nu = r * m, ny = r * p, cols = nu + ny;
+  // Work and memory first: the bases (2 r F complex), the TSQR work matrix and
+  // R (cols² + 2048·cols doubles per thread), C_Y and the SVD (3 ny² doubles).
+  if (cols > kMaxColumns)
+    fail(ErrorKind::Resource, "step 1b",
+         "r (m + p) = " + std::to_string(cols) + " rows of Z exceed the supported " + std::to_string(kMaxColumns) +
+             " (the QR and SVD of step 1 grow as r^3; use a smaller r)");
+  require_memory(32.0 * r * F + 8.0 * (3.0 * cols * cols + 2048.0 * cols) + 24.0 * ny * ny, "identify-frf",
+                 "step 1 with F = " + std::to_string(F) + ", r = " + std::to_string(r));
   if (2LL * F * c < cols)
     fail(ErrorKind::Dimension, "step 1b",
          "2 F c = " + std::to_string(2LL * F * c) + " real columns of Z are fewer than its r (m + p) = " +
@@ -260,18 +280,31 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
          "the input data matrix U^re is rank deficient (min |R11_ii| / max = " + fmt(r11.minCoeff() / r11max, 3) +
              "): the input does not excite r = " + std::to_string(r) +
              " basis functions (Pintelon 2002 Assumption 3); use fewer r or more excited lines");
-  const Eigen::VectorXd r11sv =
-      Eigen::JacobiSVD<Eigen::MatrixXd>(R.topLeftCorner(nu, nu)).singularValues();
+  const double r11_cond = triangular_condition(R.topLeftCorner(nu, nu));
   const Eigen::MatrixXd R22t = R.bottomRightCorner(ny, ny).transpose();
   // Step 1c. C_Y = Σ Re((W_y W_yᴴ) ⊗ diag σ²): entry ((i,a),(i',a')) is
   // δ_{aa'} Σ_{k,j} Re(W_i conj W_i') σ²_a(k, j).
   Eigen::MatrixXd CY = Eigen::MatrixXd::Zero(ny, ny);
   for (int a = 0; a < p; ++a) {
     Eigen::MatrixXd block = Eigen::MatrixXd::Zero(r, r);
-    for (int k = 0; k < F; ++k) {
-      const double s2 = d.variance[k].row(a).sum();
-      const Eigen::VectorXcd w = b.Wy.col(k);
-      block.noalias() += s2 * (w * w.adjoint()).real();
+    if (!b.orthogonal) {
+      // Power bases on the unit circle (ξ = z or w, |ξ| = 1):
+      // Re(ξ^i conj ξ^i') = Re ξ^{i−i'}, so the block is the symmetric Toeplitz
+      // matrix t(|i − i'|) with t(δ) = Σ_k σ²_k Re ξ_k^δ — O(F r), not O(F r²).
+      Eigen::VectorXd t = Eigen::VectorXd::Zero(r);
+      for (int k = 0; k < F; ++k) {
+        const double s2 = d.variance[k].row(a).sum();
+        for (int i = 0; i < r; ++i) t(i) += s2 * b.Wy(i, k).real();  // Wy(i, k) = ξ_k^i
+      }
+      for (int i = 0; i < r; ++i)
+        for (int i2 = 0; i2 < r; ++i2) block(i, i2) = t(std::abs(i - i2));
+    } else {
+      for (int k = 0; k < F; ++k) {
+        const double s2 = d.variance[k].row(a).sum();
+        for (int i = 0; i < r; ++i)
+          for (int i2 = 0; i2 <= i; ++i2) block(i, i2) += s2 * (b.Wy(i, k) * std::conj(b.Wy(i2, k))).real();
+      }
+      block.triangularView<Eigen::StrictlyUpper>() = block.transpose();
     }
     for (int i = 0; i < r; ++i)
       for (int i2 = 0; i2 < r; ++i2) CY(i * p + a, i2 * p + a) = block(i, i2);
@@ -286,14 +319,19 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(K, Eigen::ComputeFullU);
   s.Usvd = svd.matrixU();
   s.sigma = svd.singularValues();
-  s.r11_condition = r11sv(0) / r11sv(nu - 1);
+  s.r11_condition = r11_cond;
+  // The QR of step 1b is backward stable for all of Zᵀ: R22 carries an error
+  // ~u‖Z‖ = u‖R‖_F however small R22 is (a weak dynamic part beside a large
+  // feedthrough D U), and whitening multiplies it by at most ‖L⁻¹‖.
+  const Eigen::MatrixXd Linv = s.L.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(ny, ny));
+  s.noise_scale = Linv.cwiseAbs().colwise().sum().maxCoeff() * R.norm();
   return s;
 }
 
 // Step 3, Eq. (17): (B, D) minimising Σ |Y − (C(ξI − A)⁻¹B + D)U|² / σ²
 // as a real linear least-squares problem (Re and Im rows stacked).
 void step3(const FrfData& d, const Bases& b, const Eigen::MatrixXd& A, const Eigen::MatrixXd& C, Eigen::MatrixXd& B,
-           Eigen::MatrixXd& D) {
+           Eigen::MatrixXd& D, double* condition = nullptr) {
   const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
   const int n = static_cast<int>(A.rows());
   const int nb = n * m, nd = p * m, cols = nb + nd + 1;  // last column: right-hand side
@@ -344,8 +382,19 @@ void step3(const FrfData& d, const Bases& b, const Eigen::MatrixXd& A, const Eig
     fail(ErrorKind::Numerical, "step 3", "B and D are not determined by the data (Eq. 17 is rank deficient, "
                                          "Pintelon 2002 Assumption 5 (ii))");
   const Eigen::VectorXd theta = R1.triangularView<Eigen::Upper>().solve(rhs);
+  if (condition) *condition = triangular_condition(R1);
   B = Eigen::Map<const Eigen::MatrixXd>(theta.data(), n, m);
   D = Eigen::Map<const Eigen::MatrixXd>(theta.data() + nb, p, m);
+}
+
+// Refuses an r whose bases (2 r F complex) or step 1 would be too large.
+void check_r_size(const FrfData& d, int r) {
+  const long long cols = static_cast<long long>(r) * (d.inputs() + d.outputs());
+  if (cols > kMaxColumns)
+    fail(ErrorKind::Resource, "r", "r (m + p) = " + std::to_string(cols) + " exceeds the supported " +
+                                       std::to_string(kMaxColumns) + " (step 1 grows as r^3)");
+  require_memory(32.0 * r * d.frequencies(), "identify-frf", "the r = " + std::to_string(r) + " bases at " +
+                                                                  std::to_string(d.frequencies()) + " frequencies");
 }
 
 int check_order_r(const FrfData& d, int order, int r) {
@@ -495,6 +544,7 @@ StateSpace bilinear_to_continuous(const StateSpace& w, double omega_scale) {
 Eigen::VectorXd frf_singular_values(const FrfData& data, int r, ContinuousMethod continuous, double omega_scale) {
   validate(data);
   if (r < 2) fail(ErrorKind::Dimension, "r", "r must be at least 2, got " + std::to_string(r));
+  check_r_size(data, r);
   const Bases b = make_bases(data, r, continuous, omega_scale);
   return step1(data, b, r).sigma;
 }
@@ -502,6 +552,7 @@ Eigen::VectorXd frf_singular_values(const FrfData& data, int r, ContinuousMethod
 FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMethod continuous, double omega_scale) {
   validate(d);
   check_order_r(d, order, r);
+  check_r_size(d, r);
   const int p = d.outputs(), n = order;
   const Bases b = make_bases(d, r, continuous, omega_scale);
   const Step1 s1 = step1(d, b, r);
@@ -533,7 +584,8 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
   est.sample_time = d.sample_time;
   est.A = qr.solve(rhs);
   est.C = O.topRows(p) / (b.orthogonal ? b.q0 : 1.0);
-  step3(d, b, est.A, est.C, est.B, est.D);
+  double step3_condition = 1;
+  step3(d, b, est.A, est.C, est.B, est.D, &step3_condition);
   if (!est.A.allFinite() || !est.B.allFinite() || !est.C.allFinite() || !est.D.allFinite())
     fail(ErrorKind::Numerical, "step 3", "the estimate is not finite");
 
@@ -557,8 +609,17 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
   // that by cond(Ô_top).
   // The projection Π of Eq. (20) amplifies perturbations of the input rows by
   // cond(R11) = cond(𝐔^re) (narrow-band or short grids make it large).
-  res.condition = (s1.sigma(0) / s1.sigma(n - 1)) * (top_sv(0) / top_sv(n - 1)) * s1.r11_condition;
+  // Wedin: the subspace of step 1c moves by (rounding of L⁻¹R22ᵀ)/σ_n, with
+  // that rounding ≤ u ‖L⁻¹‖ ‖R‖ (noise_scale) — at least σ_1.
+  const double subspace = std::max(s1.sigma(0), s1.noise_scale) / s1.sigma(n - 1);
+  res.condition = subspace * (top_sv(0) / top_sv(n - 1)) * s1.r11_condition;
+  // B̂, D̂ (and so Ĝ) also carry the conditioning of step 3's least squares.
+  res.condition = std::max(res.condition, step3_condition);
   res.error_estimate = kUnitRoundoff * res.condition;
+  if (!(res.error_estimate <= 1e-6))
+    res.warnings.push_back("double precision may have lost accuracy: estimated relative error of A " +
+                           fmt(res.error_estimate, 3) + " (condition " + fmt(res.condition, 3) +
+                           "); compare with --precision high");
   res.v_sub = v_sub(est, d);
   res.poles = poles(est);
   return res;

@@ -123,6 +123,10 @@ namespace {
 void check_readable_file(const std::string& path, const char* what) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) input_error(path, std::string("is a directory, not a ") + what);
+  // A CSV cell of ~10 bytes becomes an 8-byte double held in a growing vector
+  // (up to 2x while it grows), then copied once into a matrix.
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec) require_memory(3.0 * double(size), path, std::string("reading this ") + what);
 }
 
 nlohmann::json read_json_file(const std::string& path, const char* what) {
@@ -169,7 +173,9 @@ nlohmann::json result_to_json(const SpectrumResult& r) {
                       {"max_zero_modulus", r.max_zero_modulus},
                       {"riccati_method", r.riccati_method},
                       {"riccati_iterations", r.riccati_iterations},
-                      {"riccati_residual", r.riccati_residual}};
+                      {"riccati_residual", r.riccati_residual},
+                      {"error_estimate", r.error_estimate}};
+  j["warnings"] = r.warnings;
   return j;
 }
 
@@ -405,6 +411,7 @@ nlohmann::json frf_result_to_json(const FrfResult& r, const std::string& method)
   for (const auto& [rr, v] : r.r_scan) scan.push_back({{"r", rr}, {"v_sub", v}});
   j["r_scan"] = scan;
   j["diagnostics"] = {{"condition", r.condition}, {"error_estimate", r.error_estimate}, {"noise_edge", r.noise_edge}};
+  j["warnings"] = r.warnings;
   return j;
 }
 

@@ -11,6 +11,7 @@
 #include <mutex>
 #include <sstream>
 
+#include "fdsid/compare.hpp"
 #include "fdsid/error.hpp"
 #include "fftw_lock.hpp"
 
@@ -24,6 +25,8 @@ std::mutex& detail::fftw_planner_mutex() {
 namespace {
 
 constexpr double kUnitRoundoff = std::numeric_limits<double>::epsilon() / 2;
+// Largest side of 𝒴 (p m, r m) whose SVD fdsid attempts (≈ 1 min of Jacobi sweeps here).
+constexpr int kMaxSvdDimension = 2000;
 
 std::string fmt(double x, int digits = 4) {
   std::ostringstream s;
@@ -440,6 +443,20 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
     if (r == 0) r = dr;
   }
   check_pr(N, std::max(opt.order, 1), p, r);
+  // Work and memory before anything large is allocated: the SVD of step 3 is
+  // O((pm)² rm) and holds 𝒴 and its factors (3 (pm)(rm) doubles); steps 1-2
+  // hold N m² complex inputs and real outputs; step 8 works on M+1 samples.
+  {
+    const double pm = double(p) * m, rm = double(r) * m;
+    if (pm > kMaxSvdDimension || rm > kMaxSvdDimension)
+      throw Error(ErrorKind::Resource, "step 3",
+                  "the SVD of a " + std::to_string(static_cast<long long>(pm)) + " x " +
+                      std::to_string(static_cast<long long>(rm)) + " matrix is beyond the supported " +
+                      std::to_string(kMaxSvdDimension) + " (p m and r m; its O((pm)^2 rm) work would not finish)");
+    require_memory(8.0 * (3 * pm * rm + 3.0 * N * m * m + 4.0 * (M + 1) * m * m), "identify-spectrum",
+                   "Algorithm 1 with M = " + std::to_string(M) + ", m = " + std::to_string(m) + ", p = " +
+                       std::to_string(p) + ", r = " + std::to_string(r));
+  }
   res.p = p;
   res.r = r;
 
@@ -679,6 +696,34 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
       throw Error(ErrorKind::Riccati, "step 9",
                   "no stabilising solution: the spectral factor has a zero of modulus " + fmt(zmax, 12) +
                       " (the estimated spectrum is not positive between the grid points)");
+  }
+  // Step 10's companion: say where double precision may have lost accuracy.
+  {
+    const Eigen::Index i2n = std::min<Eigen::Index>(2 * n, res.singular_values.size()) - 1;
+    const double ratio = i2n >= 0 && res.singular_values(i2n) > 0 ? res.singular_values(0) / res.singular_values(i2n)
+                                                                  : std::numeric_limits<double>::infinity();
+    double kappa = 1.0;
+    if (n > 0) {
+      Eigen::EigenSolver<Eigen::MatrixXd> es(Ahat);
+      const Eigen::MatrixXcd V = es.eigenvectors();
+      Eigen::FullPivLU<Eigen::MatrixXcd> lu(V);
+      if (lu.isInvertible()) {
+        const Eigen::MatrixXcd W = lu.inverse();
+        for (int i = 0; i < n; ++i) kappa = std::max(kappa, V.col(i).norm() * W.row(i).norm());
+      } else {
+        kappa = std::numeric_limits<double>::infinity();
+      }
+    }
+    res.error_estimate = double_precision_spectrum_tolerance(p, r, m, N, ratio) * kappa;
+    if (!(res.error_estimate <= 1e-6))
+      res.warnings.push_back("double precision may have lost accuracy: estimated relative error " +
+                             fmt(res.error_estimate, 3) + " (sigma_1/sigma_2n = " + fmt(ratio, 3) +
+                             ", pole condition " + fmt(kappa, 3) + "); compare with --precision high");
+    if (n > 0 && res.split_margin < 1e-3)
+      res.warnings.push_back("poles within " + fmt(res.split_margin, 3) +
+                             " of the unit circle: the split of step 6 and the poles are ill-conditioned");
+    if (res.riccati_residual > 1e-8)
+      res.warnings.push_back("Riccati residual " + fmt(res.riccati_residual, 3) + " above 1e-8 (step 9)");
   }
   return res;
 }

@@ -309,21 +309,34 @@ Spectrum read_spectrum_csv(const std::string& path) {
 void write_spectrum_csv(const Spectrum& spectrum, const std::string& path, int digits) {
   if (spectrum.m < 1 || spectrum.M < 1 || static_cast<int>(spectrum.S.size()) != spectrum.M + 1)
     throw InputError(path + ": spectrum to write is malformed (need m >= 1, M >= 1, M + 1 samples)");
-  std::ofstream out(path);
-  if (!out) throw InputError(path + ": cannot open for writing");
-  const std::vector<std::string> names = spectrum_header(spectrum.m);
-  for (std::size_t c = 0; c < names.size(); ++c) out << (c ? "," : "") << names[c];
-  out << '\n';
-  const Real pi = boost::math::constants::pi<Real>();
-  for (int k = 0; k <= spectrum.M; ++k) {
-    out << to_decimal(pi * Real(k) / Real(spectrum.M), digits);
-    for (int a = 0; a < spectrum.m; ++a)
-      for (int b = 0; b < spectrum.m; ++b)
-        out << ',' << to_decimal(spectrum.S[k](a, b).real(), digits) << ','
-            << to_decimal(spectrum.S[k](a, b).imag(), digits);
+  // Written to a temporary file beside the target, then renamed into place: an
+  // interrupted or failing run never leaves a half-written or clobbered file.
+  const std::string tmp = path + ".tmp-fdsid";
+  {
+    std::ofstream out(tmp, std::ios::trunc);
+    if (!out) throw InputError(path + ": cannot open for writing");
+    const std::vector<std::string> names = spectrum_header(spectrum.m);
+    for (std::size_t c = 0; c < names.size(); ++c) out << (c ? "," : "") << names[c];
     out << '\n';
+    const Real pi = boost::math::constants::pi<Real>();
+    for (int k = 0; k <= spectrum.M; ++k) {
+      out << to_decimal(pi * Real(k) / Real(spectrum.M), digits);
+      for (int a = 0; a < spectrum.m; ++a)
+        for (int b = 0; b < spectrum.m; ++b)
+          out << ',' << to_decimal(spectrum.S[k](a, b).real(), digits) << ','
+              << to_decimal(spectrum.S[k](a, b).imag(), digits);
+      out << '\n';
+    }
+    out.flush();
+    if (!out) {
+      std::remove(tmp.c_str());
+      throw InputError(path + ": write failed");
+    }
   }
-  if (!out) throw InputError(path + ": write failed");
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw InputError(path + ": cannot rename the temporary output into place");
+  }
 }
 
 FrfData read_frf_csv(const std::string& path, const std::string& domain) {

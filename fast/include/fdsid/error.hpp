@@ -18,7 +18,8 @@ enum class ErrorKind {
   Split,       ///< Akçay (2011) step 6: no clean stable/antistable split
   Positivity,  ///< spectrum data or estimate not positive, or E - C P C^T not positive definite
   Riccati,     ///< step 9: the Riccati equation has no stabilising solution
-  Numerical    ///< any other numerical breakdown
+  Numerical,   ///< any other numerical breakdown
+  Resource     ///< the input would need more memory (or work) than fdsid allows; refused before allocating
 };
 
 /// Short lower-case name of an ErrorKind ("split", "positivity", ...).
@@ -42,5 +43,15 @@ class Error : public std::runtime_error {
   std::string where_;
   std::string message_;
 };
+
+/// Memory the machine can still give (MemAvailable of /proc/meminfo, else
+/// physical memory via sysconf), in bytes; 0 when unknown.
+double available_memory_bytes();
+
+/// Throws Error(Resource) at `where` when `bytes` exceed 80 % of
+/// available_memory_bytes(), naming both figures in MiB and `what` needs them.
+/// Called before the large allocations, so an oversized input is refused
+/// instead of crashing the process.
+void require_memory(double bytes, const std::string& where, const std::string& what);
 
 }  // namespace fdsid

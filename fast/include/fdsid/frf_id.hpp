@@ -76,14 +76,19 @@ struct FrfResult {
   /// V_SUB for every r tried (empty when r was given).
   std::vector<std::pair<int, double>> r_scan;
   Eigen::VectorXcd poles;
-  /// κ = (σ_1/σ_n of step 1c) · cond(Ô_r[1:r−1]) of step 2 · cond(R11) of
-  /// step 1b: the first-order amplification of rounding errors into Â.
+  /// κ = max((max(σ_1, ‖L⁻¹‖‖R‖)/σ_n of step 1c) · cond(Ô_r[1:r−1]) of step 2 ·
+  /// cond(R11) of step 1b, cond of step 3's least squares): the first-order
+  /// amplification of rounding errors into Â (first factor; ‖L⁻¹‖‖R‖ is the
+  /// whitened size of all of Z, whose QR rounding lands in R22) and into B̂, D̂.
   double condition = 0;
   /// u · κ: a first-order estimate of the relative rounding error of Â (and
   /// the poles) on noise-free data; tests scale tolerances by it. An estimate,
   /// not a proven bound (cond(R11) was added after a narrow-band grid, n = 1,
   /// showed errors 1e6 × u with the first two factors alone).
   double error_estimate = 0;
+  /// Plain-language warnings where fast/ may lose accuracy (error_estimate
+  /// above 1e-6). Printed by the CLI and written to the JSON.
+  std::vector<std::string> warnings;
   /// Noise level of step 1c's squared singular values (Marchenko–Pastur edge of
   /// whitened noise) used by the automatic order selection; 0 when unused.
   double noise_edge = 0;

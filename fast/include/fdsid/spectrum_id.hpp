@@ -4,6 +4,7 @@
 /// Van Overschee et al. (1997) (the same pipeline with the range space of
 /// Ĝ_p F_r, Akçay Eq. (13)).
 #include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -90,6 +91,14 @@ struct SpectrumResult {
   double riccati_residual = 0.0;  ///< ||P - Ric(P)||_F / ||P||_F
   double min_spectrum = 0.0;      ///< min over the grid of λ_min(Ŝ(z_k)) (step 8 fit)
   double max_zero_modulus = 0.0;  ///< largest |zero| of Ĝ, eig(Â - B̂D̂^{-1}Ĉ): < 1 (minimum phase)
+  /// Relative accuracy double precision can promise for Ŝ on this problem:
+  /// 4 (p + r) m log2(N) u σ1/σ_2n (fdsid/compare.hpp), times the eigenvalue
+  /// condition of Â for the poles.
+  double error_estimate = 0.0;
+  /// Plain-language warnings where fast/ may lose accuracy (an error estimate
+  /// above 1e-6, poles within 1e-3 of the unit circle, a Riccati residual above
+  /// 1e-8). Empty when none applies; printed by the CLI and written to the JSON.
+  std::vector<std::string> warnings;
 };
 
 /// Akçay (2011) Algorithm 1, steps 1-10: minimum-phase spectral factor from
