@@ -383,7 +383,7 @@ RecordMeta meta_from_json(const nlohmann::json& j, const std::string& where) {
     if (!v.is_number() || std::floor(v.get<double>()) != v.get<double>()) input_error(w, "must be an integer");
     const double k = v.get<double>();
     if (k < 1 || k > m.period / 2)
-      input_error(w, "line " + std::to_string(static_cast<long long>(k)) + " is outside 1 ... P/2 = " +
+      input_error(w, "line " + v.dump() + " is outside 1 ... P/2 = " +
                          std::to_string(m.period / 2));
     m.excited_lines.push_back(static_cast<int>(k));
   }
