@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <initializer_list>
 #include <random>
 #include <sstream>
@@ -423,6 +424,32 @@ TEST_F(CliFrf, RNotAboveOrder) {
   for (const std::string r : {"4", "3"})
     EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--r", r}),
                            {"r = " + r, "must exceed the order"}));
+}
+
+// Issue "nothing lost": an output that names an input is refused before
+// anything is read or written, and the input is left byte for byte as it was.
+TEST_F(CliFrf, OutputEqualToInputIsRefused) {
+  std::vector<double> omega;
+  for (int k = 0; k < 40; ++k) omega.push_back(M_PI * (k + 0.5) / 40);
+  const std::string text = frf_csv(pintelon_plant(), omega, 1e-8);
+  const std::string f = write("g.csv", text);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--json", f}),
+                         {"--json", "refusing to overwrite"}));
+  // The same file through another spelling of its path.
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--json", path("./g.csv")}),
+                         {"refusing to overwrite"}));
+  std::ifstream in(f);
+  const std::string after((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(after, text);
+}
+
+// Resource limits: an r whose step 1 would not finish is refused with the figure.
+TEST_F(CliFrf, OversizedRIsRefusedBeforeAllocation) {
+  std::vector<double> omega;
+  for (int k = 0; k < 40; ++k) omega.push_back(M_PI * (k + 0.5) / 40);
+  const std::string f = write("g.csv", frf_csv(pintelon_plant(), omega, 1e-8));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--r", "100000"}),
+                         {"r (m + p) = 200000", "exceeds the supported 4000"}));
 }
 
 TEST_F(CliFrf, NanInCsv) {

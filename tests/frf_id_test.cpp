@@ -666,3 +666,17 @@ TEST(FrfErrors, BadRecordsThrowInputErrors) {
 
 }  // namespace
 }  // namespace fdsid
+
+// Resource limits (issue: refuse before allocating, with the figure): a request
+// far beyond any machine's memory is an Error of kind Resource naming MiB.
+TEST(ResourceLimits, RequireMemoryRefusesWithTheFigures) {
+  try {
+    fdsid::require_memory(1e30, "test", "a 1e30-byte request");
+    FAIL() << "no error";
+  } catch (const fdsid::Error& e) {
+    EXPECT_EQ(e.kind(), fdsid::ErrorKind::Resource);
+    EXPECT_NE(std::string(e.what()).find("MiB"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(fdsid::require_memory(1024.0, "test", "a kilobyte"));
+  EXPECT_GT(fdsid::available_memory_bytes(), 0.0);
+}
