@@ -722,23 +722,24 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
     const Eigen::Index i2n = std::min<Eigen::Index>(2 * n, res.singular_values.size()) - 1;
     const double ratio = i2n >= 0 && res.singular_values(i2n) > 0 ? res.singular_values(0) / res.singular_values(i2n)
                                                                   : std::numeric_limits<double>::infinity();
+    // Steps 8-9 solve Stein/Riccati-type equations in Â, whose operator
+    // P ↦ P − Â P Âᵀ has condition ≥ 1/(1 − ρ(Â)²) (its smallest singular value
+    // is at most 1 − ρ²): near the circle that amplifies the error of 𝒴's range.
     double kappa = 1.0;
     if (n > 0) {
-      Eigen::EigenSolver<Eigen::MatrixXd> es(Ahat);
-      const Eigen::MatrixXcd V = es.eigenvectors();
-      Eigen::FullPivLU<Eigen::MatrixXcd> lu(V);
-      if (lu.isInvertible()) {
-        const Eigen::MatrixXcd W = lu.inverse();
-        for (int i = 0; i < n; ++i) kappa = std::max(kappa, V.col(i).norm() * W.row(i).norm());
-      } else {
-        kappa = std::numeric_limits<double>::infinity();
-      }
+      const double rho = Ahat.eigenvalues().cwiseAbs().maxCoeff();
+      kappa = rho < 1.0 ? 1.0 / (1.0 - rho * rho) : std::numeric_limits<double>::infinity();
     }
     res.error_estimate = double_precision_spectrum_tolerance(p, r, m, N, ratio) * kappa;
     if (!(res.error_estimate <= 1e-6))
       res.warnings.push_back("double precision may have lost accuracy: estimated relative error " +
                              fmt(res.error_estimate, 3) + " (sigma_1/sigma_2n = " + fmt(ratio, 3) +
-                             ", pole condition " + fmt(kappa, 3) + "); compare with --precision high");
+                             ", 1/(1 - rho^2) = " + fmt(kappa, 3) + "); compare with --precision high");
+    if (res.order_from_data && 2 * n < res.singular_values.size() &&
+        res.singular_values(2 * n) / res.singular_values(0) > res.error_estimate)
+      res.warnings.push_back("order read from the data: sigma_" + std::to_string(2 * n + 1) + "/sigma_1 = " +
+                             fmt(res.singular_values(2 * n) / res.singular_values(0), 3) +
+                             " is above the accuracy estimate, so a weak mode may have been left out");
     if (n > 0 && res.split_margin < 1e-3)
       res.warnings.push_back("poles within " + fmt(res.split_margin, 3) +
                              " of the unit circle: the split of step 6 and the poles are ill-conditioned");

@@ -91,13 +91,14 @@ struct SpectrumResult {
   double riccati_residual = 0.0;  ///< ||P - Ric(P)||_F / ||P||_F
   double min_spectrum = 0.0;      ///< min over the grid of λ_min(Ŝ(z_k)) (step 8 fit)
   double max_zero_modulus = 0.0;  ///< largest |zero| of Ĝ, eig(Â - B̂D̂^{-1}Ĉ): < 1 (minimum phase)
-  /// Relative accuracy double precision can promise for Ŝ on this problem:
-  /// 4 (p + r) m log2(N) u σ1/σ_2n (fdsid/compare.hpp), times the eigenvalue
-  /// condition of Â for the poles.
+  /// Relative accuracy double precision can promise for Ŝ on this problem
+  /// (first order, not a proven bound): 4 (p + r) m log2(N) u σ1/σ_2n
+  /// (fdsid/compare.hpp) times 1/(1 − ρ(Â)²), the conditioning of the
+  /// Stein/Riccati operators of steps 8-9 near the unit circle.
   double error_estimate = 0.0;
   /// Plain-language warnings where fast/ may lose accuracy (an error estimate
   /// above 1e-6, poles within 1e-3 of the unit circle, a Riccati residual above
-  /// 1e-8). Empty when none applies; printed by the CLI and written to the JSON.
+  /// 1e-8, an order read from the data with σ_{2n+1}/σ_1 above the estimate). Empty when none applies; printed by the CLI and written to the JSON.
   std::vector<std::string> warnings;
 };
 
