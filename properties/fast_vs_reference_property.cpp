@@ -10,6 +10,7 @@
 #include "fdsid/reference/spectrum_id.hpp"
 #include "fdsid/spectrum_id.hpp"
 #include "rc_generators.hpp"
+#include "reference_bridge.hpp"
 #include "tolerance.hpp"
 
 namespace fdsid::testing {
@@ -29,20 +30,6 @@ reference::Spectrum to_reference(const SpectrumData& d) {
   return s;
 }
 
-StateSpace to_double(const reference::Model& m) {
-  auto conv = [](const reference::MatrixR& X) {
-    Eigen::MatrixXd Y(X.rows(), X.cols());
-    for (Eigen::Index i = 0; i < X.rows(); ++i)
-      for (Eigen::Index j = 0; j < X.cols(); ++j) Y(i, j) = X(i, j).convert_to<double>();
-    return Y;
-  };
-  StateSpace s;
-  s.A = conv(m.A);
-  s.B = conv(m.B);
-  s.C = conv(m.C);
-  s.D = conv(m.D);
-  return s;
-}
 
 RC_GTEST_PROP(FastVsReference, AgreeOnNoiseFreeAndNoisySpectra, ()) {
   const SystemSpec spec = *gen_system_spec(2, 4);

@@ -33,6 +33,7 @@
 #include "fdsid/frf_id.hpp"
 #include "fdsid/reference/frf_id.hpp"
 #include "rc_generators.hpp"
+#include "reference_bridge.hpp"
 
 namespace fdsid::testing {
 namespace {
@@ -60,20 +61,6 @@ reference::FrfData to_reference(const FrfData& d) {
   return r;
 }
 
-StateSpace to_double(const reference::Model& m) {
-  auto conv = [](const reference::MatrixR& X) {
-    Eigen::MatrixXd Y(X.rows(), X.cols());
-    for (Eigen::Index i = 0; i < X.rows(); ++i)
-      for (Eigen::Index j = 0; j < X.cols(); ++j) Y(i, j) = X(i, j).convert_to<double>();
-    return Y;
-  };
-  StateSpace s;
-  s.A = conv(m.A);
-  s.B = conv(m.B);
-  s.C = conv(m.C);
-  s.D = conv(m.D);
-  return s;
-}
 
 /// Condition number of step 3's real regressor for (B, D) given Â, Ĉ (Eq. 17
 /// with W = 1/σ): rows Re/Im of [C R_k ⊗ 1, 1] / σ_k.

@@ -36,6 +36,7 @@
 #include "fdsid/reference/spectrum_id.hpp"
 #include "fdsid/spectrum_id.hpp"
 #include "tolerance.hpp"
+#include "reference_bridge.hpp"
 
 namespace fdsid {
 namespace {
@@ -101,20 +102,7 @@ reference::Spectrum to_reference(const SpectrumData& d) {
   return s;
 }
 
-StateSpace to_double(const reference::Model& m) {
-  auto conv = [](const reference::MatrixR& X) {
-    Eigen::MatrixXd Y(X.rows(), X.cols());
-    for (Eigen::Index i = 0; i < X.rows(); ++i)
-      for (Eigen::Index j = 0; j < X.cols(); ++j) Y(i, j) = X(i, j).convert_to<double>();
-    return Y;
-  };
-  StateSpace s;
-  s.A = conv(m.A);
-  s.B = conv(m.B);
-  s.C = conv(m.C);
-  s.D = conv(m.D);
-  return s;
-}
+using testing::to_double;
 
 std::string sci(double x, int digits = 3) {
   char buffer[40];
