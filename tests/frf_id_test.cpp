@@ -680,3 +680,65 @@ TEST(ResourceLimits, RequireMemoryRefusesWithTheFigures) {
   EXPECT_NO_THROW(fdsid::require_memory(1024.0, "test", "a kilobyte"));
   EXPECT_GT(fdsid::available_memory_bytes(), 0.0);
 }
+
+namespace fdsid {
+
+// Theorems 1 and 2 on the paper's own plant (Eq. 36), known variance and sample
+// variance with M = 4: the RMS relative error of Ĝ at five fixed frequencies,
+// over S = 12 seeds, shrinks like F^{-1/2} from F = 100 to F = 1600 (ratio 4).
+// Margin as in properties/frf_properties.cpp: the log of an RMS over S seeds
+// has std ≤ 1/(2√S), a ratio of two ≤ 1/√(2S); z = 4.5 (one-sided 3.4e-6):
+// ratio ≥ 4 exp(−4.5/√(2S)) = 1.60. Uniform grids ω_k = π(k − ½)/F,
+// noise CN(0, σ²) on Ŷ with σ = 0.03 · RMS|G₀ − D|.
+TEST(FrfConsistency, PintelonPlantErrorShrinksLikeOneOverSqrtF) {
+  const StateSpace sys = pintelon_plant();
+  const int S = 12, r = 8;
+  const std::vector<double> test_w = {0.15, 0.6, 1.2, 2.0, 2.9};
+  double g2 = 0;
+  for (int k = 0; k < 64; ++k) g2 += (frequency_response(sys, M_PI * (k + 0.5) / 64) - sys.D).squaredNorm() / 64;
+  const double var = 9e-4 * g2;
+  auto rms = [&](int F, int M) {
+    double acc = 0;
+    int count = 0;
+    for (int s = 0; s < S; ++s) {
+      std::mt19937_64 rng(1000 + 7919 * s + F + 31 * M);
+      Eigen::VectorXd w(F);
+      for (int k = 0; k < F; ++k) w(k) = M_PI * (k + 0.5) / F;
+      const std::vector<Eigen::MatrixXcd> G0 = frequency_response(sys, w);
+      FrfData d;
+      if (M == 0) {
+        std::vector<Eigen::MatrixXcd> G;
+        std::vector<Eigen::MatrixXd> V;
+        for (int k = 0; k < F; ++k) {
+          G.push_back(G0[k] + Eigen::MatrixXcd::Constant(1, 1, testing::complex_normal(rng, var)));
+          V.push_back(Eigen::MatrixXd::Constant(1, 1, var));
+        }
+        d = frf_data(Domain::Discrete, w, G, V);
+      } else {
+        std::vector<std::vector<Eigen::VectorXcd>> U(M), Y(M);
+        for (int k = 0; k < F; ++k)
+          for (int l = 0; l < M; ++l) {
+            U[l].push_back(Eigen::VectorXcd::Ones(1));
+            Y[l].push_back(Eigen::VectorXcd::Constant(1, G0[k](0, 0) + testing::complex_normal(rng, M * var)));
+          }
+        d = sample_statistics(Domain::Discrete, w, U, Y).data;
+      }
+      const FrfResult res = identify_frf_fixed(d, 4, r);
+      for (double om : test_w) {
+        const cplx g0 = frequency_response(sys, om)(0, 0);
+        acc += std::norm((frequency_response(res.model, om)(0, 0) - g0) / g0);
+        ++count;
+      }
+    }
+    return std::sqrt(acc / count);
+  };
+  const double floor = 4 * std::exp(-4.5 / std::sqrt(2.0 * S));
+  for (int M : {0, 4}) {
+    const double e100 = rms(100, M), e1600 = rms(1600, M);
+    std::printf("consistency (%s): RMS error F=100 %.3g, F=1600 %.3g, ratio %.3g (>= %.3g)\n",
+                M == 0 ? "known variance" : "sample variance, M = 4", e100, e1600, e100 / e1600, floor);
+    EXPECT_GE(e100 / e1600, floor) << "M = " << M;
+  }
+}
+
+}  // namespace fdsid
