@@ -78,13 +78,18 @@ RC_GTEST_PROP(FastVsReference, AgreeOnNoiseFreeAndNoisySpectra, ()) {
 
   // Tolerance: compare.hpp's bound for the double computation, with the Wedin gap
   // σ_2n - σ_2n+1 (not σ_2n) since noisy 𝒴 is not of rank 2n; the reference is
-  // exact to ~1e-45 in comparison. Poles: times the condition number of the
-  // eigenvalues of Â (the reference's, converted).
+  // exact to ~1e-45 in comparison. Times 1/(1 − ρ²), ρ the reference's largest
+  // pole modulus: steps 8-9 solve Stein/Riccati-type equations in Â whose
+  // operator P ↦ P − Â P Âᵀ has smallest singular value ≤ 1 − ρ² (the same
+  // factor fast/'s error_estimate carries; spectrum_id.hpp). Poles: times the
+  // condition number of the eigenvalues of the shift matrix.
   const double s1 = ref.singular_values_Y[0].convert_to<double>();
   const double gap = (ref.singular_values_Y[2 * n - 1] -
                       (ref.singular_values_Y.size() > static_cast<size_t>(2 * n) ? ref.singular_values_Y[2 * n] : 0))
                          .convert_to<double>();
-  const double tol = double_precision_spectrum_tolerance(p, r, m, 2 * M, s1 / gap);
+  double rho = 0;
+  for (const auto& l : ref.poles) rho = std::max(rho, abs(l).convert_to<double>());
+  const double tol = double_precision_spectrum_tolerance(p, r, m, 2 * M, s1 / gap) / (1 - rho * rho);
   double err = 0, scale = 0;
   for (int k = 0; k <= 2 * M; ++k) {
     const cplx z = std::polar(1.0, M_PI * k / (2.0 * M));
@@ -92,8 +97,28 @@ RC_GTEST_PROP(FastVsReference, AgreeOnNoiseFreeAndNoisySpectra, ()) {
     err = std::max(err, (power_spectrum(f.model, z) - S).norm());
     scale = std::max(scale, S.norm());
   }
+  const double perr = pole_error(g, f.model);
+  const double ptol = eigenvalue_condition(shift_matrix(
+                          Eigen::JacobiSVD<Eigen::MatrixXd>(
+                              akcay_matrix(fourier_coefficients(d, o.extension), m, p, r), Eigen::ComputeThinU)
+                              .matrixU()
+                              .leftCols(2 * n),
+                          m)) *
+                      tol;
   RC_LOG() << "M = " << M << ", noisy = " << noisy << ", relative spectrum difference " << err / scale
-           << ", tolerance " << tol << "\n";
+           << ", tolerance " << tol << ", pole difference " << perr << ", tolerance " << ptol
+           << ", reference 1 - rho = " << 1 - rho << ", fast/ split margin " << f.split_margin << ", estimate "
+           << f.error_estimate << ", warnings " << f.warnings.size() << "\n";
+  if (noisy && !(err / scale <= tol && perr <= ptol)) {
+    // Noise can put a pole pair on the unit circle (1 − |λ| = 1e-14 in a case
+    // found by this property: Ã's eigenvalues λ and 1/λ̄ then coincide to
+    // rounding and the step-8 fit cancels 1e9-sized Ê, F̂). Double precision
+    // cannot agree there; the rule (as in tests/hard_systems_test.cpp) is that
+    // fast/ then says so: a warning on its result, never a silent disagreement.
+    RC_CLASSIFY(true, "ill-conditioned, fast/ warned");
+    RC_ASSERT(!f.warnings.empty());
+    return;
+  }
   RC_ASSERT(err / scale <= tol);
   if (!noisy) {
     // Both interpolate (Theorem 1): the reference's model, rounded to double, has the
@@ -106,13 +131,7 @@ RC_GTEST_PROP(FastVsReference, AgreeOnNoiseFreeAndNoisySpectra, ()) {
     }
     RC_ASSERT(terr / scale <= tol);
   }
-  RC_ASSERT(pole_error(g, f.model) <= eigenvalue_condition(shift_matrix(
-                            Eigen::JacobiSVD<Eigen::MatrixXd>(akcay_matrix(fourier_coefficients(d, o.extension), m, p, r),
-                                                              Eigen::ComputeThinU)
-                                .matrixU()
-                                .leftCols(2 * n),
-                            m)) *
-                            tol);
+  RC_ASSERT(perr <= ptol);
 }
 
 }  // namespace
