@@ -1,0 +1,200 @@
+// Sim-to-real gap statistic in 50-digit arithmetic (see gap.hpp), and the
+// periodic-records CSV reader. No Eigen decomposition is instantiated here:
+// the DFTs are the direct sums of period_spectra, the model response is
+// frequency_response (both frf_id.cpp).
+#include "fdsid/reference/gap.hpp"
+
+#include "fdsid/reference/frf_id.hpp"
+#include "fdsid/reference/io.hpp"
+
+#include <boost/math/constants/constants.hpp>
+
+#include <cctype>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace fdsid::reference {
+namespace {
+
+std::string fmt(const Real& x, int digits = 6) { return x.str(digits, std::ios_base::scientific); }
+
+bool finite(const Real& x) { return (boost::multiprecision::isfinite)(x); }
+
+std::string trim(const std::string& text) {
+  std::size_t begin = 0, end = text.size();
+  while (begin < end && std::isspace(static_cast<unsigned char>(text[begin]))) ++begin;
+  while (end > begin && std::isspace(static_cast<unsigned char>(text[end - 1]))) --end;
+  return text.substr(begin, end - begin);
+}
+
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> cells;
+  std::stringstream stream(line);
+  std::string cell;
+  while (std::getline(stream, cell, ',')) cells.push_back(trim(cell));
+  if (!line.empty() && line.back() == ',') cells.push_back("");
+  return cells;
+}
+
+// Ē, s², t and p at the lines of `which` (index `offset` … into the spectra).
+LineStatistics line_statistics(const std::vector<std::vector<MatrixC>>& spectra, std::size_t offset,
+                               const std::vector<int>& lines,
+                               const std::function<Complex(int)>& response, int M,
+                               const char* which) {
+  LineStatistics out;
+  out.lines = lines;
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const int k = lines[i];
+    const Complex G = response(k);
+    if (!finite(G.real()) || !finite(G.imag()))
+      throw InputError("gap_statistic: response at " + std::string(which) + " line " +
+                       std::to_string(k) + " is not finite");
+    // E_l(k) = Y_l(k) − G′(k) U_l(k); spectra[l][j] = (U_l, Y_l) at line j.
+    std::vector<Complex> E(M);
+    Complex mean(0);
+    for (int l = 0; l < M; ++l) {
+      const MatrixC& Z = spectra[l][offset + i];
+      E[l] = Z(1, 0) - G * Z(0, 0);
+      mean += E[l];
+    }
+    mean /= Real(M);
+    Real variance = 0;  // two-pass: Σ |E_l − Ē|², no cancellation
+    for (int l = 0; l < M; ++l) variance += std::norm(E[l] - mean);
+    variance /= Real(M - 1);
+    if (variance == 0)
+      throw InputError("gap_statistic: the residual at " + std::string(which) + " line " +
+                       std::to_string(k) + " is identical in all " + std::to_string(M) +
+                       " periods (sample variance 0): t is undefined");
+    const Real t = Real(M) * std::norm(mean) / variance;
+    out.mean_residual.push_back(mean);
+    out.variance.push_back(variance);
+    out.t.push_back(t);
+    out.p.push_back(gap_p_value(t, M));
+  }
+  return out;
+}
+
+}  // namespace
+
+Real gap_p_value(const Real& t, int M) {
+  if (M < 2) throw InputError("gap_p_value: M = " + std::to_string(M) + " < 2");
+  if (!(t >= 0)) throw InputError("gap_p_value: t = " + fmt(t) + " is not >= 0");
+  // Survival function of F(2, 2M−2) (gap.hpp): (1 + 2t/d)^{−d/2}, d = 2M − 2.
+  const Real half_d = Real(M - 1);
+  return pow(1 + t / half_d, -half_d);
+}
+
+GapStatistic gap_statistic(const std::vector<Real>& u, const std::vector<Real>& y, int period,
+                           int periods, const std::vector<int>& excited_lines,
+                           const std::vector<int>& unexcited_lines,
+                           const std::function<Complex(int)>& response) {
+  if (period < 2) throw InputError("gap_statistic: period = " + std::to_string(period) + " < 2");
+  if (periods < 3)
+    throw InputError("gap_statistic: periods M = " + std::to_string(periods) +
+                     " < 3 (the sample variance needs M >= 2, the normalisation "
+                     "(M-2)/(M-1) of the mean of F(2, 2M-2) needs M >= 3)");
+  const std::size_t length = static_cast<std::size_t>(period) * static_cast<std::size_t>(periods);
+  if (u.size() != length || y.size() != length)
+    throw InputError("gap_statistic: u has " + std::to_string(u.size()) + " and y has " +
+                     std::to_string(y.size()) + " samples, period * periods = " +
+                     std::to_string(length));
+  if (excited_lines.empty()) throw InputError("gap_statistic: no excited lines");
+  if (!response) throw InputError("gap_statistic: no response given");
+  std::set<int> seen;
+  auto check = [&](const std::vector<int>& lines, const char* which) {
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+      const int k = lines[i];
+      if (k < 1 || k > period / 2)
+        throw InputError("gap_statistic: " + std::string(which) + " line " + std::to_string(k) +
+                         " (entry " + std::to_string(i) + ") is outside 1 ... period/2 = " +
+                         std::to_string(period / 2));
+      if (!seen.insert(k).second)
+        throw InputError("gap_statistic: " + std::string(which) + " line " + std::to_string(k) +
+                         " (entry " + std::to_string(i) + ") is repeated or also in the other list");
+    }
+  };
+  check(excited_lines, "excited");
+  check(unexcited_lines, "unexcited");
+
+  // Eq. (4) per period, both lists in one call: [l][j] = (U_l(k_j), Y_l(k_j))ᵀ.
+  std::vector<int> all = excited_lines;
+  all.insert(all.end(), unexcited_lines.begin(), unexcited_lines.end());
+  const auto spectra = period_spectra({u, y}, period, periods, all);
+
+  GapStatistic out;
+  out.M = periods;
+  out.excited = line_statistics(spectra, 0, excited_lines, response, periods, "excited");
+  out.unexcited =
+      line_statistics(spectra, excited_lines.size(), unexcited_lines, response, periods, "unexcited");
+  Real sum = 0;
+  for (const Real& t : out.excited.t) sum += t;
+  const Real K = Real(static_cast<long long>(excited_lines.size()));
+  out.gap = (Real(periods - 2) / Real(periods - 1)) * sum / K;
+  return out;
+}
+
+GapStatistic gap_statistic(const std::vector<Real>& u, const std::vector<Real>& y, int period,
+                           int periods, const std::vector<int>& excited_lines,
+                           const std::vector<int>& unexcited_lines, const Model& model,
+                           const Real& sample_time) {
+  if (model.B.cols() != 1 || model.C.rows() != 1 || model.D.rows() != 1 || model.D.cols() != 1)
+    throw InputError("gap_statistic: the model is not SISO (B is " + std::to_string(model.B.rows()) +
+                     "x" + std::to_string(model.B.cols()) + ", C is " +
+                     std::to_string(model.C.rows()) + "x" + std::to_string(model.C.cols()) + ")");
+  const bool continuous = model.domain == "continuous";
+  if (!continuous && model.domain != "discrete")
+    throw InputError("gap_statistic: model domain \"" + model.domain +
+                     "\" is neither discrete nor continuous");
+  if (continuous && !(sample_time > 0 && finite(sample_time)))
+    throw InputError("gap_statistic: sample_time = " + fmt(sample_time) + " is not > 0");
+  if (period < 2) throw InputError("gap_statistic: period = " + std::to_string(period) + " < 2");
+  const Real two_pi = 2 * boost::math::constants::pi<Real>();
+  // Line k: ω = 2πk/P rad/sample (ξ = e^{jω}), or 2πk/(P·Ts) rad/s (ξ = jω).
+  const Real scale = continuous ? two_pi / (Real(period) * sample_time) : two_pi / Real(period);
+  const std::function<Complex(int)> response = [&](int k) {
+    return frequency_response(model, scale * Real(k))(0, 0);
+  };
+  return gap_statistic(u, y, period, periods, excited_lines, unexcited_lines, response);
+}
+
+Records read_records_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open");
+  auto fail = [&](int line, const std::string& what) {
+    throw InputError(path + ":" + std::to_string(line) + ": " + what);
+  };
+  std::string line;
+  int line_number = 0;
+  std::vector<std::string> header;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (!trim(line).empty()) {
+      header = split_csv(trim(line));
+      break;
+    }
+  }
+  if (header != std::vector<std::string>{"u", "y"})
+    fail(line_number, "header must be u,y (one input, one output)");
+  Records records;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (trim(line).empty()) continue;
+    const std::vector<std::string> cells = split_csv(trim(line));
+    if (cells.size() != 2) fail(line_number, std::to_string(cells.size()) + " cells, header has 2");
+    Real values[2];
+    for (int c = 0; c < 2; ++c) {
+      try {
+        values[c] = parse_decimal(cells[c]);
+      } catch (const InputError& e) {
+        fail(line_number, "column " + header[c] + ": " + e.what());
+      }
+    }
+    records.u.push_back(values[0]);
+    records.y.push_back(values[1]);
+  }
+  if (records.u.empty()) fail(line_number, "no samples");
+  return records;
+}
+
+}  // namespace fdsid::reference
