@@ -13,8 +13,12 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "fdsid/error.hpp"
 #include "fdsid/frf_id.hpp"
+#include "fdsid/gap.hpp"
+#include "fdsid/gap_validate.hpp"
 #include "fdsid/io.hpp"
 #include "fdsid/paper.hpp"
 #include "fdsid/simulate.hpp"
@@ -426,6 +430,93 @@ int run_figure(const std::string& json_path, int figure, fdsid::FigureOptions o)
 
 }  // namespace
 
+std::string band_text(const std::array<double, 2>& b) {
+  return "[" + sci(b[0], 4) + ", " + sci(b[1], 4) + "]";
+}
+
+// Plot-ready table next to the JSON: frequency, t(k) before and after, flag.
+void write_gap_table(const std::string& path, const fdsid::GapReport& r) {
+  std::ostringstream csv;
+  csv << "frequency_hz,t_before,t_after,flagged\n";
+  char buf[128];
+  for (Eigen::Index i = 0; i < r.frequency.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%.10g,%.10g,%.10g,%d\n", r.frequency(i), r.t_before(i), r.t_after(i),
+                  static_cast<int>(r.flagged[i]));
+    csv << buf;
+  }
+  fdsid::write_text_file(path, csv.str());
+}
+
+int run_gap(const std::string& json_path, const std::string& model_path, const std::string& data_path,
+            const std::string& meta_path, const std::string& table_path, const fdsid::GapOptions& o) {
+  Out out{json_path == "-"};
+  const fdsid::StateSpace model = fdsid::read_model(model_path);
+  int inputs = 0;
+  const Eigen::MatrixXd rec = fdsid::read_records_csv(data_path, inputs);
+  const fdsid::RecordMeta meta = fdsid::read_meta(meta_path);
+  fdsid::GapReport r;
+  try {
+    r = fdsid::diagnose_gap(model, rec, inputs, meta, o);
+  } catch (const fdsid::Error& e) {
+    throw e.within(data_path);
+  }
+  out << "gap before " << sci(r.gap_before) << " (1 = the model is right up to the noise; " << r.excited
+      << " excited lines, M = " << meta.periods << "), after " << sci(r.gap_after) << "\n";
+  out << "verdict: ";
+  if (r.present.empty()) out << "no significant gap (noise alone at level " << o.alpha << ")\n";
+  for (size_t i = 0; i < r.present.size(); ++i) out << (i ? ", " : "") << r.present[i];
+  if (!r.present.empty()) out << "\n";
+  out << "tests: p(gap) " << sci(r.p_gap) << ", p(nonlinearity, " << r.unexcited << " unexcited lines) "
+      << sci(r.p_nonlinearity) << ", p(leakage) " << sci(r.p_leakage) << "\n";
+  if (!r.bands.empty()) {
+    out << "bands (Hz):";
+    for (const auto& b : r.bands) out << " " << band_text(b);
+    out << "\n";
+  }
+  out << "candidates (each alone):\n";
+  for (const fdsid::EffectFit& f : r.candidates) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "  %-16s gap_after %-10.4g shrink %-8.3f p %-9.2e", f.effect.c_str(), f.gap_after,
+                  f.shrink, f.p_value);
+    out << buf;
+    for (const auto& kv : f.parameters) out << " " << kv.first << "=" << sci(kv.second, 4);
+    out << "\n";
+  }
+  for (const std::string& n : r.notes) out << "note: " << n << "\n";
+  if (!table_path.empty()) write_gap_table(table_path, r);
+  emit_json(json_path, fdsid::gap_report_to_json(r));
+  return 0;
+}
+
+int run_gap_validate(const std::string& json_path, fdsid::GapValidationOptions o) {
+  Out out{json_path == "-"};
+  if (isatty(fileno(stderr)))  // progress on a terminal only
+    o.progress = [](int done, int total) {
+      std::fprintf(stderr, "\rgap-validate: %d/%d cases", done, total);
+      if (done == total) std::fprintf(stderr, "\n");
+    };
+  const fdsid::GapValidation v = fdsid::validate_gap(o);
+  const json j = fdsid::gap_validation_to_json(v);
+  out << "gap-validate: " << v.cases << " blind cases (P = " << o.period << ", M = " << o.periods
+      << ", seed " << o.seed << "), exact verdicts " << sci(v.accuracy, 3) << "\n";
+  for (const auto& c : v.by_category)
+    out << "  " << c.first << ": " << c.second[0] << "/" << c.second[1] << " correct\n";
+  out << "  clear single effects " << j["clear_single_rate"].get<double>() << " (target >= 0.95), subtle or paired "
+      << j["subtle_or_pair_rate"].get<double>() << " (>= 0.80), false alarms " << v.false_alarm_rate
+      << " (<= 0.05), band hits " << v.band_hit_rate << "\n";
+  out << "  gap_after on correct verdicts: median " << j["gap_after_correct"]["median"].dump() << ", p90 "
+      << j["gap_after_correct"]["p90"].dump() << ", max " << j["gap_after_correct"]["max"].dump()
+      << ", share <= 2: " << j["gap_after_correct"]["share_at_most_2"].dump() << "\n";
+  out << "confusion (truth -> verdict: count):\n";
+  for (const auto& t : v.confusion)
+    for (const auto& p : t.second)
+      if (p.first != t.first) out << "  " << t.first << " -> " << p.first << ": " << p.second << "\n";
+  emit_json(json_path, j);
+  const bool met = fdsid::gap_validation_targets_met(v);
+  out << (met ? "targets met\n" : "targets NOT met\n");
+  return met ? 0 : 1;
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"fdsid: frequency-domain subspace identification (Akcay 2011, Pintelon 2002)"};
   app.require_subcommand(1);
@@ -530,10 +621,33 @@ int main(int argc, char** argv) {
   std::string smp_precision = "double";
   smp->add_option("--precision", smp_precision, "double (default) or high (50-digit reference, 40 digits written)");
 
+  auto* gap = app.add_subcommand("gap", "sim-to-real gap: where a model and a periodic measurement disagree, and why");
+  std::string gap_data, gap_meta, gap_table;
+  fdsid::GapOptions gapo;
+  gap->add_option("--model", model_path, "simulation model JSON (SISO)")->required();
+  gap->add_option("--data", gap_data, "periodic records CSV (u,y), M whole periods")->required();
+  gap->add_option("--meta", gap_meta, "meta JSON: period, periods, sample_time, excited_lines")->required();
+  gap->add_option("--json", json_path, "write the report here (- = stdout)");
+  gap->add_option("--table", gap_table, "write the plot-ready table (frequency, t before/after, flag) here");
+  gap->add_option("--alpha", gapo.alpha, "level of each detection test (default 0.01)");
+  gap->add_option("--effect-alpha", gapo.effect_alpha, "level of the F-test admitting an effect (default 1e-3)");
+  gap->add_option("--fdr", gapo.fdr, "false-discovery rate of the bands (default 0.05)");
+
+  auto* gval = app.add_subcommand("gap-validate", "blind validation of gap on generated cases (effects withheld)");
+  fdsid::GapValidationOptions gvo;
+  gval->add_option("--cases", gvo.cases, "number of cases (default 100)")->check(CLI::Range(1, 100000));
+  gval->add_option("--seed", gvo.seed, "random seed");
+  gval->add_option("--period", gvo.period, "samples per period P (default 1024)")->check(CLI::Range(32, 1 << 20));
+  gval->add_option("--periods", gvo.periods, "periods M (default 8)")->check(CLI::Range(4, 1000));
+  gval->add_option("--threads", gvo.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
+  gval->add_option("--workdir", gvo.workdir, "write the cases' files here (default: a temporary directory)");
+  gval->add_flag("--keep-files", gvo.keep_files, "keep each case's model.json, data.csv, meta.json");
+  gval->add_option("--json", json_path, "write the scores here (- = stdout)");
+
   // CLI11 reports an unknown subcommand as "A subcommand is required"; name it.
   {
     const std::vector<std::string> top = {"reproduce", "identify-spectrum", "identify-frf", "check",
-                                          "sample-spectrum", "simulate-records"};
+                                          "sample-spectrum", "simulate-records", "gap", "gap-validate"};
     const std::vector<std::string> targets = {"table1", "table2", "fig1", "fig2"};
     auto unknown = [](const std::string& word, const std::vector<std::string>& known) {
       return !word.empty() && word[0] != '-' && std::find(known.begin(), known.end(), word) == known.end();
@@ -559,13 +673,23 @@ int main(int argc, char** argv) {
   }
 
   try {
-    for (const CLI::App* sub : {t1, t2, ids, chk, idf, figs[0], figs[1]})
+    for (const CLI::App* sub : {t1, t2, ids, chk, idf, figs[0], figs[1], gap, gval})
       if (sub->parsed() && sub->count("--json") > 0 && json_path.empty())
         throw fdsid::Error(fdsid::ErrorKind::Input, "--json", "empty path (use - for stdout)");
     if (ids->parsed()) refuse_overwrite(json_path, {data_path}, "--json");
     if (chk->parsed()) refuse_overwrite(json_path, {model_path, data_path}, "--json");
     if (idf->parsed()) refuse_overwrite(json_path, {frf.frf_path, frf.data_path, frf.meta_path}, "--json");
     if (smp->parsed()) refuse_overwrite(out_path, {model_path}, "--out");
+    if (gval->parsed()) {
+      if (static_cast<long long>(gvo.period) * gvo.periods > 10000000LL)
+        throw fdsid::Error(fdsid::ErrorKind::Input, "--period", "period x periods above 1e7 samples");
+      return run_gap_validate(json_path, gvo);
+    }
+    if (gap->parsed()) {
+      refuse_overwrite(json_path, {model_path, gap_data, gap_meta}, "--json");
+      refuse_overwrite(gap_table, {model_path, gap_data, gap_meta, json_path}, "--table");
+      return run_gap(json_path, model_path, gap_data, gap_meta, gap_table, gapo);
+    }
     if (sim->parsed()) {
       refuse_overwrite(rec_out, {rec_model}, "--out");
       refuse_overwrite(rec_meta, {rec_model}, "--meta-out");

@@ -1,0 +1,100 @@
+#pragma once
+/// Sim-to-real gap diagnosis (CONTRACTS.md, `fdsid gap`): where a simulation
+/// model and a periodic measurement disagree in frequency, which unmodelled
+/// effect explains it, and how far the gap shrinks once that effect is added.
+///
+/// The noise floor is Pintelon (2002)'s non-parametric noise model (Section
+/// 4.1, Eq. 25): the sample mean and variance over the M periods. Per DFT line
+/// k the per-period residual E_l(k) = Y_l(k) − G(k) U_l(k) (Eq. 4 scaling) has
+/// sample mean Ē(k) and sample variance s²(k), and
+///   t(k) = M |Ē(k)|² / s²(k)  ~  F(2, 2M − 2)   when the model is right
+/// (circular complex Gaussian noise, independent over periods: 2M|Ē|²/σ² is
+/// χ²₂ and 2(M−1)s²/σ² is χ²_{2M−2}, independent). Its mean is (M−1)/(M−2),
+/// so the gap is
+///   gap = (M − 2)/(M − 1) · mean over the excited lines of t(k),
+/// which is 1 in expectation for a right model, whatever M ≥ 4.
+///
+/// Tests (all stated levels are options):
+///  - the gap on the excited lines: Fisher's combination −2 Σ ln p(k) ~ χ²_{2K}
+///    of the per-line p-values p(k) = (1 + t/(M−1))^{−(M−1)} (the exact survival
+///    function of F(2, 2M−2));
+///  - nonlinearity: the same on the unexcited lines inside the excited band
+///    (a random-odd multisine leaves them empty; a linear system keeps them so);
+///  - leakage: period l against the mean of the later ones, d = E_l − Ē_{>l},
+///    |d|²/(s²_{>l}(1 + 1/(M−l−1))) ~ F(2, 2(M−l−1) − 2) on every line — model
+///    errors are periodic and cancel in d, so this test sees only the transient;
+///  - linear effects: added greedily, each admitted by a quasi-likelihood F-test
+///    F = ((V₀ − V₁)/q) / (V₁/(2K − q_total)) ~ F(q, 2K − q_total) (V the
+///    variance-weighted residual sum, q the effect's real parameters), which
+///    compares the reduction with the misfit that remains rather than with the
+///    noise alone, and by a relevance rule (it must remove a stated share of
+///    the current excess gap − 1).
+/// Bands: Benjamini–Hochberg at a stated false-discovery rate over the
+/// per-line p-values of the model as given; flagged excited lines within two
+/// excited lines of each other form one band (windows of 8 lines when no single
+/// line is flagged).
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "fdsid/frf_id.hpp"
+#include "fdsid/model.hpp"
+
+namespace fdsid {
+
+struct GapOptions {
+  double alpha = 0.01;         ///< level of each detection test (gap, nonlinearity, leakage)
+  double effect_alpha = 1e-3;  ///< level of the F-test admitting a linear effect
+  double min_share = 0.25;     ///< share of the current excess gap an admitted effect must remove
+  double fdr = 0.05;           ///< Benjamini–Hochberg false-discovery rate of the bands
+};
+
+/// One effect fitted to the data alone (added to the model as given) or as
+/// part of the chosen set.
+struct EffectFit {
+  std::string effect;                        ///< a CONTRACTS.md effect name
+  double gap_after = 0;                      ///< gap with this effect added
+  double shrink = 0;                         ///< 1 − gap_after / gap_before
+  int dof = 0;                               ///< real parameters it adds
+  double p_value = 1;                        ///< its test (see the file comment)
+  std::map<std::string, double> parameters;  ///< e.g. {"samples": 1.5} for a delay
+};
+
+struct GapReport {
+  double gap_before = 0, gap_after = 0;
+  std::vector<std::string> present;                ///< judged present, largest shrink first
+  std::vector<std::array<double, 2>> bands;        ///< Hz (cycles/sample when Ts = 1)
+  std::vector<EffectFit> candidates;               ///< every effect tried alone, best first
+  std::vector<EffectFit> chosen;                   ///< the present ones, as fitted jointly (greedy order)
+  int periods_used = 0;                            ///< M after dropping transient periods
+  int excited = 0, unexcited = 0;                  ///< lines in each test
+  double p_gap = 1, p_nonlinearity = 1, p_leakage = 1;  ///< detection tests on the model as given
+  GapOptions options;
+  /// Plot-ready table over the excited lines: frequency (Hz), t(k) of the model
+  /// as given and with every present effect added, and the per-line flag.
+  Eigen::VectorXd frequency, t_before, t_after;
+  std::vector<bool> flagged;
+  std::vector<std::string> notes;
+};
+
+/// Diagnoses the gap between `model` (SISO, discrete or continuous) and the
+/// periodic record (columns u, y; P·M rows) with its meta data. Throws
+/// Error(Input) for a non-SISO model or record, fewer than 4 periods, fewer
+/// than 4 excited lines, or a record without period-to-period variation (no
+/// noise floor: noise-free or copied periods).
+GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, int inputs, const RecordMeta& meta,
+                       const GapOptions& options = {});
+
+/// The report as CONTRACTS.md's `fdsid gap` JSON (gap_before, gap_after,
+/// present, bands, candidates) plus the tests' p-values, levels and the chosen
+/// effects' joint parameters.
+nlohmann::json gap_report_to_json(const GapReport& report);
+
+/// Survival function of F(2, d2): P(F > t) = (1 + 2t/d2)^{−d2/2}.
+double f2_survival(double t, int d2);
+
+}  // namespace fdsid

@@ -1,0 +1,114 @@
+#pragma once
+/// Cases for the blind validation of the sim-to-real gap diagnosis
+/// (`fdsid gap-validate`, CONTRACTS.md): a random simulation model (what the
+/// user has), a periodic u,y record of a "true" system that differs from it by
+/// zero, one or two withheld effects, the record's meta data, and the truth
+/// (effects, frequency bands, parameters, noise level) to score against.
+///
+/// The case, step by step (all draws from one std::mt19937_64 seeded by
+/// `seed`; the output noise has its own stream, so switching it off with the
+/// testing hook `noise = false` changes nothing else):
+///
+/// 1. Simulation model G(z) = D + Σ_i c_i/(z − p_i) + c̄_i/(z − p̄_i) [+ r/(z − a)]:
+///    2 … 4 resonances, p_i = exp(ω_i(−ζ_i + j√(1−ζ_i²))) with ω_i spread
+///    (one per log-spaced slot) inside the excited band, ζ_i log-uniform on
+///    [0.01, 0.2], residues of random size (peak gains within a factor 10) and
+///    near-quadrature phase; a real pole with probability 1/2; D = 0 with
+///    probability 1/2. Realised in real modal form (2×2 blocks), minimal, with
+///    distinct poles; discrete, sample time 1.
+/// 2. Excitation: random-odd multisine (Schoukens): odd lines 1 … K, K a random
+///    fraction 0.15 … 0.4 of P/2; in each full group of 4 consecutive odd lines
+///    one random line is left out; random phases, flat amplitude, RMS 1 exactly.
+///    Even lines are never excited.
+/// 3. True system: u → [input polynomial] → plant → [output polynomial] →
+///    sensor low-pass → gain → delay, where the plant is the simulation model
+///    with a mode moved (mode_mismatch) and/or a resonance added in parallel or
+///    in series (unmodelled_mode). Every stage but the withheld ones is the
+///    identity. The record is the exact periodic steady state (computed per
+///    line, Y(k) = G(e^{j2πk/P}) U(k), polynomials in the time domain of one
+///    period), except with `leakage`: then the experiment starts from rest
+///    (zero state), and the transient of the true system is added.
+/// 4. Noise: output noise v = H_v(q) e, e white Gaussian, H_v a random stable
+///    first- or second-order filter normalised to mean |H_v|² = 1 over the
+///    excited lines; one stationary sequence over the whole record (different
+///    in every period). Its variance per line of one period's DFT
+///    (Z(k) = P^{-1/2} Σ z(t) e^{−j2πkt/P}) is σ²(k) = ν |H_v(e^{j2πk/P})|².
+///    With probability 1/2 a tiny white noise on the recorded input too
+///    (its effect on Y/U at most 1 % of the output noise's, in variance).
+///
+/// Strength calibration. For each withheld effect alone (applied to the
+/// simulation model), ratio = mean over its lines of |ΔY(k)|² / (σ²(k)/M),
+/// ΔY the noise-free deviation of the output spectrum (per-period DFT as above):
+///  - linear effects: ΔY(k) = (G_true(k) − G_sim(k)) U(k) at the excited lines;
+///  - nonlinearity: ΔY(k) = Y(k) at the non-excited lines 1 … K (the distortion);
+///  - leakage: ΔY(k) = the first period's transient, at every line 1 … K, and
+///    divided by σ²(k) (one period, not the mean of M).
+/// A target ratio is drawn log-uniformly from gap_ratio_range(strength); the
+/// effect's physical parameters are drawn from a per-strength range, the noise
+/// level ν is set to make that draw hit the target (for two effects: the
+/// geometric mean) within an output SNR of 20 … 60 dB (signal power over noise
+/// power at the excited lines, per period), and then each effect's magnitude is
+/// rescaled by bisection to hit its target exactly. When an effect cannot reach
+/// its target within its physical bounds (leakage never grows beyond "from
+/// rest") the noise is lowered instead, if need be beyond the 60 dB end
+/// (then truth["snr_clamped"] is true). Achieved ratios are in the truth.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "fdsid/frf_id.hpp"
+#include "fdsid/model.hpp"
+
+namespace fdsid {
+
+enum class Strength { None, Subtle, Clear };
+
+/// "none", "subtle", "clear".
+const char* to_string(Strength strength);
+
+/// The effect names of CONTRACTS.md: gain_error, delay, sensor_dynamics,
+/// unmodelled_mode, mode_mismatch, nonlinearity, leakage.
+const std::vector<std::string>& gap_effect_names();
+
+/// The range the calibration ratio (see above) is drawn from: Subtle [0.5, 3],
+/// Clear [10, 100]; None [0, 0].
+std::array<double, 2> gap_ratio_range(Strength strength);
+
+struct GapCaseOptions {
+  std::vector<std::string> effects;  ///< 0, 1 or 2 distinct names of gap_effect_names()
+  Strength strength = Strength::Clear;  ///< ignored when `effects` is empty; None needs it empty
+  int period = 1024;                 ///< P: even, 32 … 2^22
+  int periods = 8;                   ///< M ≥ 2
+  std::uint64_t seed = 1;
+  bool noise = true;                 ///< testing hook: false leaves out the input and output noise (nothing else changes)
+};
+
+struct GapCase {
+  StateSpace sim_model;              ///< what the user has: discrete, sample_time 1
+  Eigen::MatrixXd record;            ///< P·M rows × 2 columns (u, y)
+  RecordMeta meta;                   ///< period, periods, sample_time = 1, excited_lines
+  std::vector<std::string> effects;  ///< the truth, in the order given
+  /// Truth: bands (cycles/sample, sorted, disjoint) holding the lines that make
+  /// up half of each effect's calibration ratio (at most 4 per effect, padded by
+  /// one line each side); empty for effect-free cases.
+  std::vector<std::array<double, 2>> bands;
+  /// Effect parameters, achieved ratios, noise level and filter, system, excitation.
+  /// Fields: "strength", "seed", "period", "periods", "snr_db", "snr_clamped",
+  /// "noise" {"scale" (ν), "filter" {"b", "a"} (H_v in z^-1), "input_std"},
+  /// "system" {"modes" [{"frequency", "damping", "residue" [re, im]}], "real_pole", "D"},
+  /// "excitation" {"band_line" (K), "lines", "rms"}, "ratio_combined" (all
+  /// effects together, on the excited lines), and "details" {name: {"ratio",
+  /// "target_ratio", "scale", "bands", parameters…}} per effect.
+  nlohmann::json truth;
+};
+
+/// Makes one case; deterministic in options.seed. Throws Error(Input) for an
+/// unknown or repeated effect name, more than two effects, effects with
+/// Strength::None, or a bad P / M.
+GapCase make_gap_case(const GapCaseOptions& options);
+
+}  // namespace fdsid

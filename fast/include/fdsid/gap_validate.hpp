@@ -1,0 +1,68 @@
+#pragma once
+/// Blind validation of the gap diagnosis (`fdsid gap-validate`, CONTRACTS.md):
+/// cases from fdsid/gap_cases.hpp whose effects are withheld. For each case
+/// the three files a user would have (model JSON, u,y CSV, meta JSON) are
+/// written to a working directory and read back through the same readers as
+/// `fdsid gap`; the diagnosis sees nothing else. Scoring happens afterwards
+/// against the truth kept in memory.
+///
+/// Schedule (cycle of 20 cases): 2 effect-free, the 7 effects alone at Clear
+/// strength, the 7 alone at Subtle strength, 4 pairs of distinct effects
+/// (drawn at random, Clear). Case i uses seed (seed · 1000003 + i).
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "fdsid/gap.hpp"
+
+namespace fdsid {
+
+struct GapValidationOptions {
+  int cases = 100;
+  std::uint64_t seed = 1;
+  int period = 1024, periods = 8;
+  std::string workdir;  ///< where the case files go (created; removed afterwards unless keep_files)
+  bool keep_files = false;
+  int threads = 0;      ///< 0: hardware concurrency
+  GapOptions gap;
+  std::function<void(int done, int total)> progress;  ///< called from the worker threads, serialised
+};
+
+struct GapValidationCase {
+  int index = 0;
+  std::uint64_t seed = 0;
+  std::string category;   ///< "none", "clear", "subtle", "pair"
+  std::string truth, verdict;  ///< effect sets joined by "+", "none" when empty
+  bool correct = false;
+  double gap_before = 0, gap_after = 0;
+  int truth_bands = 0, bands_hit = 0;  ///< truth bands overlapped by a reported band
+  std::string error;      ///< the diagnosis refused the case (counted as wrong)
+};
+
+struct GapValidation {
+  int cases = 0;
+  double accuracy = 0;  ///< exact verdict sets, all cases
+  std::map<std::string, std::map<std::string, int>> confusion;  ///< truth → verdict → count
+  std::map<std::string, std::array<int, 2>> by_category;        ///< category → {correct, total}
+  double false_alarm_rate = 0;  ///< effect-free cases with a non-empty verdict
+  double band_hit_rate = 0;     ///< truth bands hit / truth bands, over cases with effects
+  std::vector<double> gap_after_correct;  ///< sorted, correct verdicts with effects
+  std::vector<GapValidationCase> rows;
+};
+
+GapValidation validate_gap(const GapValidationOptions& options);
+
+/// CONTRACTS.md's gap-validate JSON ({"cases", "accuracy", "confusion", …}) with
+/// the per-category rates, the targets of the gap issue and whether each is met.
+nlohmann::json gap_validation_to_json(const GapValidation& v);
+
+/// Whether the issue's targets are met: ≥ 95 % correct on clear single
+/// effects, ≥ 80 % on subtle or paired effects, ≤ 5 % false alarms, and
+/// gap_after ≤ 2 on (at least 90 % of) the correct verdicts.
+bool gap_validation_targets_met(const GapValidation& v);
+
+}  // namespace fdsid

@@ -1,0 +1,1001 @@
+#include "fdsid/gap_cases.hpp"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <numeric>
+#include <random>
+#include <set>
+
+#include "fdsid/error.hpp"
+#include "fftw_lock.hpp"
+
+namespace fdsid {
+
+const char* to_string(Strength s) {
+  switch (s) {
+    case Strength::None: return "none";
+    case Strength::Subtle: return "subtle";
+    case Strength::Clear: return "clear";
+  }
+  return "?";
+}
+
+const std::vector<std::string>& gap_effect_names() {
+  static const std::vector<std::string> names = {"gain_error",    "delay",        "sensor_dynamics", "unmodelled_mode",
+                                                 "mode_mismatch", "nonlinearity", "leakage"};
+  return names;
+}
+
+std::array<double, 2> gap_ratio_range(Strength s) {
+  switch (s) {
+    case Strength::Subtle: return {0.5, 3.0};
+    case Strength::Clear: return {10.0, 100.0};
+    case Strength::None: break;
+  }
+  return {0.0, 0.0};
+}
+
+namespace {
+
+using json = nlohmann::json;
+constexpr double kPi = M_PI;
+constexpr double kTwoPi = 2 * M_PI;
+const char* const kWhere = "gap case";
+
+// ---------------------------------------------------------------------------
+// Random draws: platform-independent (raw 64-bit words of mt19937_64 turned
+// into doubles and normals here, not by the implementation-defined <random>
+// distributions).
+class Draw {
+ public:
+  explicit Draw(std::uint64_t seed) : gen_(seed) {}
+  double unit() { return static_cast<double>(gen_() >> 11) * 0x1.0p-53; }            // [0, 1)
+  double open_unit() { return (static_cast<double>(gen_() >> 11) + 0.5) * 0x1.0p-53; }  // (0, 1)
+  double uniform(double a, double b) { return a + (b - a) * unit(); }
+  double log_uniform(double a, double b) { return std::exp(uniform(std::log(a), std::log(b))); }
+  bool coin(double p = 0.5) { return unit() < p; }
+  double sign() { return coin() ? 1.0 : -1.0; }
+  int integer(int a, int b) { return std::min(b, a + static_cast<int>(unit() * (b - a + 1))); }  // a … b
+  double normal() {  // Box–Muller
+    if (spare_) {
+      spare_ = false;
+      return spare_value_;
+    }
+    const double r = std::sqrt(-2 * std::log(open_unit())), t = kTwoPi * unit();
+    spare_value_ = r * std::sin(t);
+    spare_ = true;
+    return r * std::cos(t);
+  }
+
+ private:
+  std::mt19937_64 gen_;
+  bool spare_ = false;
+  double spare_value_ = 0;
+};
+
+std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
+// ---------------------------------------------------------------------------
+// Second-order sections in q = z^{-1}: (b0 + b1 q + b2 q²) / (1 + a1 q + a2 q²).
+struct Section {
+  double b0 = 1, b1 = 0, b2 = 0, a1 = 0, a2 = 0;
+  cplx at(cplx q) const { return (b0 + q * (b1 + q * b2)) / (1.0 + q * (a1 + q * a2)); }
+  // y = H x from rest (direct form II transposed).
+  void filter(const std::vector<double>& x, std::vector<double>& y) const {
+    double w1 = 0, w2 = 0;
+    y.resize(x.size());
+    for (std::size_t t = 0; t < x.size(); ++t) {
+      const double xt = x[t], yt = b0 * xt + w1;
+      w1 = b1 * xt - a1 * yt + w2;
+      w2 = b2 * xt - a2 * yt;
+      y[t] = yt;
+    }
+  }
+};
+
+/// Discrete pole of a continuous-like resonance: exp(ω(−ζ + j√(1−ζ²))), ω in rad/sample.
+cplx resonance_pole(double omega, double zeta) {
+  return std::exp(cplx(-zeta * omega, omega * std::sqrt(std::max(0.0, 1 - zeta * zeta))));
+}
+
+struct Mode {
+  double omega = 0, zeta = 0;  // natural frequency (rad/sample), damping ratio
+  cplx residue;                // c of c/(z − p) + c̄/(z − p̄)
+  cplx pole() const { return resonance_pole(omega, zeta); }
+  Section section() const {
+    const cplx p = pole();
+    Section s;
+    s.b0 = 0;
+    s.b1 = 2 * residue.real();
+    s.b2 = -2 * (residue * std::conj(p)).real();
+    s.a1 = -2 * p.real();
+    s.a2 = std::norm(p);
+    return s;
+  }
+};
+
+/// The simulation model in modal form.
+struct Base {
+  std::vector<Mode> modes;
+  bool has_real = false;
+  double real_pole = 0, real_residue = 0, D = 0;
+};
+
+StateSpace realise(const Base& b) {
+  const int n = 2 * static_cast<int>(b.modes.size()) + (b.has_real ? 1 : 0);
+  StateSpace m;
+  m.domain = Domain::Discrete;
+  m.sample_time = 1.0;
+  m.A = Eigen::MatrixXd::Zero(n, n);
+  m.B = Eigen::MatrixXd::Zero(n, 1);
+  m.C = Eigen::MatrixXd::Zero(1, n);
+  m.D = Eigen::MatrixXd::Constant(1, 1, b.D);
+  int i = 0;
+  for (const Mode& md : b.modes) {
+    // A = [σ ω'; −ω' σ], B = [0; β], C = [−2 Im c, 2 Re c]/β gives c/(z−p) + c̄/(z−p̄), p = σ + jω'.
+    const cplx p = md.pole();
+    m.A(i, i) = m.A(i + 1, i + 1) = p.real();
+    m.A(i, i + 1) = p.imag();
+    m.A(i + 1, i) = -p.imag();
+    const double c1 = -2 * md.residue.imag(), c2 = 2 * md.residue.real();
+    const double beta = std::sqrt(std::max(std::hypot(c1, c2), 1e-300));
+    m.B(i + 1, 0) = beta;
+    m.C(0, i) = c1 / beta;
+    m.C(0, i + 1) = c2 / beta;
+    i += 2;
+  }
+  if (b.has_real) {
+    const double beta = std::sqrt(std::abs(b.real_residue));
+    m.A(i, i) = b.real_pole;
+    m.B(i, 0) = beta;
+    m.C(0, i) = b.real_residue / beta;
+  }
+  return m;
+}
+
+// ---------------------------------------------------------------------------
+// FFT of one period, unitary: X(k) = P^{-1/2} Σ x(t) e^{−j2πkt/P}, k = 0 … P/2.
+class Fft {
+ public:
+  explicit Fft(int P) : P_(P), scale_(1.0 / std::sqrt(static_cast<double>(P))) {
+    r_ = fftw_alloc_real(static_cast<std::size_t>(P));
+    c_ = fftw_alloc_complex(static_cast<std::size_t>(P / 2 + 1));
+    if (!r_ || !c_) throw Error(ErrorKind::Resource, kWhere, "FFTW could not allocate its buffers");
+    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
+    fwd_ = fftw_plan_dft_r2c_1d(P, r_, c_, FFTW_ESTIMATE);
+    bwd_ = fftw_plan_dft_c2r_1d(P, c_, r_, FFTW_ESTIMATE);
+  }
+  ~Fft() {
+    {
+      std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
+      fftw_destroy_plan(fwd_);
+      fftw_destroy_plan(bwd_);
+    }
+    fftw_free(r_);
+    fftw_free(c_);
+  }
+  Fft(const Fft&) = delete;
+  Fft& operator=(const Fft&) = delete;
+
+  std::vector<cplx> forward(const double* x) {
+    std::copy(x, x + P_, r_);
+    fftw_execute(fwd_);
+    std::vector<cplx> X(static_cast<std::size_t>(P_ / 2 + 1));
+    for (std::size_t k = 0; k < X.size(); ++k) X[k] = scale_ * cplx(c_[k][0], c_[k][1]);
+    return X;
+  }
+  /// Inverse of forward for a real signal (the imaginary parts at DC and P/2 are ignored).
+  std::vector<double> inverse(const std::vector<cplx>& X) {
+    for (std::size_t k = 0; k < X.size(); ++k) {
+      c_[k][0] = X[k].real();
+      c_[k][1] = X[k].imag();
+    }
+    fftw_execute(bwd_);
+    std::vector<double> x(r_, r_ + P_);
+    for (double& v : x) v *= scale_;
+    return x;
+  }
+
+ private:
+  int P_;
+  double scale_;
+  double* r_ = nullptr;
+  fftw_complex* c_ = nullptr;
+  fftw_plan fwd_ = nullptr, bwd_ = nullptr;
+};
+
+// ---------------------------------------------------------------------------
+// Effects: parameters drawn at magnitude 1, scaled by `scale` ∈ [0, scale_max]
+// (scale 0 is always the identity).
+enum class Kind { Gain, Delay, Sensor, Unmodelled, Mismatch, Nonlinear, Leakage };
+
+struct Effect {
+  std::string name;
+  Kind kind = Kind::Gain;
+  double scale = 1, scale_max = 1, target = 0, ratio = 0;
+  double gain0 = 1;                                    // gain_error: g = 1 + s (g0 − 1)
+  double delay0 = 0;                                   // delay: τ = s τ0
+  int order = 1;                                       // sensor_dynamics: order, T = s T0, ω_c = 1/T
+  double time_constant0 = 0, sensor_zeta = 0.7;
+  bool series = false;                                 // unmodelled_mode
+  double extra_omega = 0, extra_zeta = 0, kappa0 = 0;  // series: ζ_zero = ζ (1 + s κ0)
+  cplx extra_residue0;                                 // parallel: residue s c0
+  int mode = 0;                                        // mode_mismatch: ω' = ω (1 + s δ0), ζ' = ζ e^{s λ0}
+  double shift0 = 0, damping_log0 = 0;
+  bool at_input = false;                               // nonlinearity: x + s (a2 x²/r + a3 x³/r²)
+  double quad0 = 0, cubic0 = 0, reference_rms = 1;
+  std::vector<int> lines;                              // the lines the ratio is taken over
+  std::vector<double> line_ratio;                      // per line, at the final scale
+};
+
+Kind kind_of(const std::string& name) {
+  static const std::pair<const char*, Kind> table[] = {
+      {"gain_error", Kind::Gain},       {"delay", Kind::Delay},           {"sensor_dynamics", Kind::Sensor},
+      {"unmodelled_mode", Kind::Unmodelled}, {"mode_mismatch", Kind::Mismatch}, {"nonlinearity", Kind::Nonlinear},
+      {"leakage", Kind::Leakage}};
+  for (const auto& [n, k] : table)
+    if (name == n) return k;
+  std::string list;
+  for (const auto& n : gap_effect_names()) list += (list.empty() ? "" : ", ") + n;
+  throw Error(ErrorKind::Input, kWhere, "unknown effect '" + name + "' (known: " + list + ")");
+}
+
+/// The true system: u → f_in → plant → f_out → sensor → gain → delay.
+struct Chain {
+  std::vector<Section> parallel;  // plant = D + Σ parallel, then × Π series
+  std::vector<Section> series;
+  double D = 0;
+  bool in_nl = false, out_nl = false;
+  double in_a2 = 0, in_a3 = 0, in_r = 1, out_a2 = 0, out_a3 = 0, out_r = 1;
+  std::vector<Section> sensor;
+  double gain = 1, delay = 0, leak = 0;
+
+  cplx plant_at(cplx q) const {
+    cplx g = D;
+    for (const Section& s : parallel) g += s.at(q);
+    for (const Section& s : series) g *= s.at(q);
+    return g;
+  }
+  cplx meas_at(double omega, cplx q, bool with_delay = true) const {
+    cplx g = gain;
+    for (const Section& s : sensor) g *= s.at(q);
+    if (with_delay && delay != 0) g *= std::polar(1.0, -omega * delay);
+    return g;
+  }
+  void plant_filter(const std::vector<double>& x, std::vector<double>& y) const {
+    y.assign(x.size(), 0.0);
+    for (std::size_t t = 0; t < x.size(); ++t) y[t] = D * x[t];
+    std::vector<double> tmp;
+    for (const Section& s : parallel) {
+      s.filter(x, tmp);
+      for (std::size_t t = 0; t < x.size(); ++t) y[t] += tmp[t];
+    }
+    for (const Section& s : series) {
+      s.filter(y, tmp);
+      y.swap(tmp);
+    }
+  }
+};
+
+double poly(double x, double a2, double a3, double r) { return x + a2 * x * x / r + a3 * x * x * x / (r * r); }
+
+Chain make_chain(const Base& base, const std::vector<const Effect*>& effects) {
+  std::vector<Mode> modes = base.modes;
+  Chain c;
+  c.D = base.D;
+  for (const Effect* e : effects) {
+    const double s = e->scale;
+    switch (e->kind) {
+      case Kind::Gain: c.gain *= 1 + s * (e->gain0 - 1); break;
+      case Kind::Delay: c.delay += s * e->delay0; break;
+      case Kind::Sensor: {
+        const double T = s * e->time_constant0;
+        if (T <= 0) break;
+        const double wc = 1 / T;
+        Section sec;
+        if (e->order == 1) {
+          const double a = std::exp(-wc);
+          sec.b0 = 1 - a;
+          sec.a1 = -a;
+        } else {
+          const cplx p = resonance_pole(wc, e->sensor_zeta);
+          sec.a1 = -2 * p.real();
+          sec.a2 = std::norm(p);
+          sec.b0 = 1 + sec.a1 + sec.a2;
+        }
+        c.sensor.push_back(sec);
+        break;
+      }
+      case Kind::Unmodelled:
+        if (e->series) {
+          const cplx p = resonance_pole(e->extra_omega, e->extra_zeta);
+          const cplx z = resonance_pole(e->extra_omega, e->extra_zeta * (1 + s * e->kappa0));
+          Section sec;
+          sec.b1 = -2 * z.real();
+          sec.b2 = std::norm(z);
+          sec.a1 = -2 * p.real();
+          sec.a2 = std::norm(p);
+          const double k = (1 + sec.a1 + sec.a2) / (1 + sec.b1 + sec.b2);  // unit DC gain
+          sec.b0 = k;
+          sec.b1 *= k;
+          sec.b2 *= k;
+          c.series.push_back(sec);
+        } else {
+          Mode m{e->extra_omega, e->extra_zeta, s * e->extra_residue0};
+          c.parallel.push_back(m.section());
+        }
+        break;
+      case Kind::Mismatch:
+        modes[static_cast<std::size_t>(e->mode)].omega *= 1 + s * e->shift0;
+        modes[static_cast<std::size_t>(e->mode)].zeta *= std::exp(s * e->damping_log0);
+        break;
+      case Kind::Nonlinear:
+        if (e->at_input) {
+          c.in_nl = true;
+          c.in_a2 = s * e->quad0;
+          c.in_a3 = s * e->cubic0;
+          c.in_r = e->reference_rms;
+        } else {
+          c.out_nl = true;
+          c.out_a2 = s * e->quad0;
+          c.out_a3 = s * e->cubic0;
+          c.out_r = e->reference_rms;
+        }
+        break;
+      case Kind::Leakage: c.leak = s; break;
+    }
+  }
+  for (const Mode& m : modes) c.parallel.push_back(m.section());
+  if (base.has_real) {
+    Section sec;
+    sec.b0 = 0;
+    sec.b1 = base.real_residue;
+    sec.a1 = -base.real_pole;
+    c.parallel.push_back(sec);
+  }
+  return c;
+}
+
+// ---------------------------------------------------------------------------
+/// Everything fixed before the effects are calibrated.
+struct Setting {
+  int P = 0, M = 0, K = 0;
+  std::vector<double> omega;      // bins 0 … P/2
+  std::vector<cplx> q;            // e^{−jω}
+  std::vector<int> excited, unexcited_band, band;  // excited; non-excited 1 … K; all 1 … K
+  std::vector<double> u;          // one period of the input
+  std::vector<cplx> U;            // its spectrum, bins 0 … P/2
+  std::vector<cplx> Hsim;         // simulation model at every bin
+  std::vector<double> y_sim;      // one period of its steady-state output
+  std::vector<double> w;          // noise shape |H_v|² at every bin (mean 1 over the excited lines)
+};
+
+/// Steady-state output spectrum (bins 0 … P/2) of one period.
+std::vector<cplx> steady(const Chain& c, const Setting& st, Fft& fft, bool with_delay) {
+  const std::size_t bins = st.U.size();
+  std::vector<cplx> X = st.U;
+  if (c.in_nl) {
+    std::vector<double> x = st.u;
+    for (double& v : x) v = poly(v, c.in_a2, c.in_a3, c.in_r);
+    X = fft.forward(x.data());
+  }
+  for (std::size_t k = 0; k < bins; ++k) X[k] *= c.plant_at(st.q[k]);
+  if (c.out_nl) {
+    std::vector<double> x = fft.inverse(X);
+    for (double& v : x) v = poly(v, c.out_a2, c.out_a3, c.out_r);
+    X = fft.forward(x.data());
+  }
+  for (std::size_t k = 0; k < bins; ++k) X[k] *= c.meas_at(st.omega[k], st.q[k], with_delay);
+  X.back() = X.back().real();  // P/2: a real signal's line (a fractional delay there has no real meaning)
+  return X;
+}
+
+/// The transient of the chain started from rest (delay left out): y_rest(t) − y_ss(t), over `periods` periods.
+std::vector<double> transient(const Chain& c, const Setting& st, const std::vector<double>& y_ss_nodelay, int periods) {
+  const std::size_t P = static_cast<std::size_t>(st.P), N = P * static_cast<std::size_t>(periods);
+  std::vector<double> x(N), y, tmp;
+  for (std::size_t t = 0; t < N; ++t) x[t] = st.u[t % P];
+  if (c.in_nl)
+    for (double& v : x) v = poly(v, c.in_a2, c.in_a3, c.in_r);
+  c.plant_filter(x, y);
+  if (c.out_nl)
+    for (double& v : y) v = poly(v, c.out_a2, c.out_a3, c.out_r);
+  for (const Section& s : c.sensor) {
+    s.filter(y, tmp);
+    y.swap(tmp);
+  }
+  for (std::size_t t = 0; t < N; ++t) y[t] = c.gain * y[t] - y_ss_nodelay[t % P];
+  return y;
+}
+
+/// tr delayed by τ ≥ 0 samples with an ideal (band-limited) delay, truncated
+/// to a Hann-windowed sinc of half-width 32 (taps normalised to unit DC gain;
+/// exact for integer τ); before the start the from-rest output is 0, so the
+/// transient there is −y_ss. `tr` must run at least 32 samples past the record.
+std::vector<double> delay_transient(const std::vector<double>& tr, const std::vector<double>& y_ss_nodelay, double tau,
+                                    std::size_t N) {
+  if (tau == 0) return std::vector<double>(tr.begin(), tr.begin() + static_cast<long>(N));
+  constexpr int L = 32;
+  const long P = static_cast<long>(y_ss_nodelay.size()), n = static_cast<long>(std::floor(tau));
+  const double f = tau - static_cast<double>(n);
+  auto ext = [&](long i) {
+    if (i >= 0) return tr[static_cast<std::size_t>(i)];
+    return -y_ss_nodelay[static_cast<std::size_t>(((i % P) + P) % P)];
+  };
+  std::vector<double> h;
+  long m0 = 0;
+  if (f == 0) {
+    h = {1.0};
+  } else {
+    m0 = -L + 1;
+    double sum = 0;
+    for (long m = m0; m <= L; ++m) {
+      const double x = static_cast<double>(m) - f;
+      h.push_back(std::sin(kPi * x) / (kPi * x) * 0.5 * (1 + std::cos(kPi * x / L)));
+      sum += h.back();
+    }
+    for (double& v : h) v /= sum;
+  }
+  std::vector<double> out(N);
+  for (std::size_t t = 0; t < N; ++t) {
+    double acc = 0;
+    for (std::size_t j = 0; j < h.size(); ++j) acc += h[j] * ext(static_cast<long>(t) - n - (m0 + static_cast<long>(j)));
+    out[t] = acc;
+  }
+  return out;
+}
+
+/// Σ-normalised deviation of one effect alone (magnitude s): returns
+/// A = mean over its lines of |ΔY(k)|² / (|H_v(k)|²/M) — the ratio is A/ν —
+/// and, when asked, the per-line terms.
+class Calibrator {
+ public:
+  Calibrator(const Base& base, const Setting& st, Fft& fft) : base_(base), st_(st), fft_(fft) {}
+
+  double deviation(const Effect& e, double s, std::vector<double>* per_line = nullptr) {
+    Effect es = e;
+    es.scale = s;
+    std::vector<double> r;
+    switch (e.kind) {
+      case Kind::Nonlinear: {
+        std::vector<double> x = e.at_input ? st_.u : st_.y_sim;
+        const double a2 = s * e.quad0, a3 = s * e.cubic0;
+        for (double& v : x) v = poly(v, a2, a3, e.reference_rms);
+        const std::vector<cplx> X = fft_.forward(x.data());
+        for (int k : st_.unexcited_band) {
+          const cplx y = e.at_input ? st_.Hsim[static_cast<std::size_t>(k)] * X[static_cast<std::size_t>(k)]
+                                    : X[static_cast<std::size_t>(k)];
+          r.push_back(std::norm(y) * st_.M / st_.w[static_cast<std::size_t>(k)]);
+        }
+        break;
+      }
+      case Kind::Leakage: {
+        if (T1_.empty()) {
+          const Chain c = make_chain(base_, {});
+          const std::vector<double> tr = transient(c, st_, st_.y_sim, 1);
+          T1_ = fft_.forward(tr.data());
+        }
+        for (int k : st_.band)
+          r.push_back(s * s * std::norm(T1_[static_cast<std::size_t>(k)]) / st_.w[static_cast<std::size_t>(k)]);
+        break;
+      }
+      default: {
+        const Chain c = make_chain(base_, {&es});
+        for (int k : st_.excited) {
+          const std::size_t i = static_cast<std::size_t>(k);
+          const cplx dY = (c.plant_at(st_.q[i]) * c.meas_at(st_.omega[i], st_.q[i]) - st_.Hsim[i]) * st_.U[i];
+          r.push_back(std::norm(dY) * st_.M / st_.w[i]);
+        }
+      }
+    }
+    const double A = r.empty() ? 0.0 : std::accumulate(r.begin(), r.end(), 0.0) / static_cast<double>(r.size());
+    if (per_line) *per_line = std::move(r);
+    return A;
+  }
+
+  const std::vector<int>& lines(const Effect& e) const {
+    return e.kind == Kind::Nonlinear ? st_.unexcited_band : e.kind == Kind::Leakage ? st_.band : st_.excited;
+  }
+
+ private:
+  const Base& base_;
+  const Setting& st_;
+  Fft& fft_;
+  std::vector<cplx> T1_;
+};
+
+/// Bands (cycles/sample) holding the lines that make up half the total ratio.
+std::vector<std::array<double, 2>> bands_of(const std::vector<int>& lines, const std::vector<double>& r, int P) {
+  std::vector<std::array<double, 2>> out;
+  const double total = std::accumulate(r.begin(), r.end(), 0.0);
+  if (!(total > 0)) return out;
+  std::vector<std::size_t> idx(r.size());
+  std::iota(idx.begin(), idx.end(), 0);
+  std::stable_sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return r[a] > r[b]; });
+  std::vector<std::size_t> chosen;
+  double cum = 0;
+  for (std::size_t i : idx) {
+    chosen.push_back(i);
+    cum += r[i];
+    if (cum >= 0.5 * total) break;
+  }
+  std::sort(chosen.begin(), chosen.end());
+  struct Group {
+    int lo, hi;
+    double mass;
+  };
+  std::vector<Group> groups;
+  for (std::size_t i : chosen) {
+    const int k = lines[i];
+    if (!groups.empty() && k - groups.back().hi <= 4) {
+      groups.back().hi = k;
+      groups.back().mass += r[i];
+    } else {
+      groups.push_back({k, k, r[i]});
+    }
+  }
+  std::stable_sort(groups.begin(), groups.end(), [](const Group& a, const Group& b) { return a.mass > b.mass; });
+  if (groups.size() > 4) groups.resize(4);
+  for (const Group& g : groups)
+    out.push_back({std::max(0.0, (g.lo - 1.0) / P), std::min(0.5, (g.hi + 1.0) / P)});
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+std::vector<std::array<double, 2>> merge_bands(std::vector<std::array<double, 2>> b) {
+  std::sort(b.begin(), b.end());
+  std::vector<std::array<double, 2>> out;
+  for (const auto& x : b) {
+    if (!out.empty() && x[0] <= out.back()[1])
+      out.back()[1] = std::max(out.back()[1], x[1]);
+    else
+      out.push_back(x);
+  }
+  return out;
+}
+
+json bands_json(const std::vector<std::array<double, 2>>& b) {
+  json j = json::array();
+  for (const auto& x : b) j.push_back({x[0], x[1]});
+  return j;
+}
+
+// ---------------------------------------------------------------------------
+Base draw_system(Draw& d, double w_lo, double w_hi) {
+  Base b;
+  const int n = d.integer(2, 4);
+  const double l0 = std::log(w_lo), l1 = std::log(w_hi);
+  const double overall = std::pow(10.0, d.uniform(-1, 1));
+  for (int i = 0; i < n; ++i) {
+    Mode m;
+    m.omega = std::exp(l0 + (l1 - l0) * (i + d.uniform(0.15, 0.85)) / n);
+    m.zeta = d.log_uniform(0.01, 0.2);
+    const double peak = overall * d.log_uniform(0.3, 3.0);
+    const cplx p = m.pole();
+    m.residue = d.sign() * peak * (1 - std::abs(p)) * std::polar(1.0, -kPi / 2 + d.uniform(-0.4, 0.4));
+    b.modes.push_back(m);
+  }
+  if (d.coin()) {
+    b.has_real = true;
+    b.real_pole = std::exp(-d.log_uniform(0.5 * w_lo, 2 * w_hi));
+    b.real_residue = d.sign() * overall * d.log_uniform(0.3, 3.0) * (1 - b.real_pole);
+  }
+  if (d.coin()) b.D = d.sign() * overall * d.log_uniform(0.05, 0.5);
+  return b;
+}
+
+void draw_effect(Effect& e, Draw& d, Strength strength, const Base& base, const Setting& st, double w_lo,
+                 double w_band) {
+  const bool clear = strength == Strength::Clear;
+  switch (e.kind) {
+    case Kind::Gain: {
+      const bool up = d.coin();
+      const double dev = clear ? (up ? d.uniform(0.05, 0.4) : d.uniform(0.05, 0.3)) : d.uniform(0.005, 0.03);
+      e.gain0 = up ? 1 + dev : 1 - dev;
+      e.scale_max = up ? 2.0 / dev : 0.8 / dev;  // g ∈ [0.2, 3]
+      break;
+    }
+    case Kind::Delay: {
+      const double phase = clear ? d.uniform(0.15, 1.0) : d.uniform(0.02, 0.15);  // at the band edge
+      e.delay0 = phase / w_band;
+      if (clear && d.coin() && std::round(e.delay0) >= 1 && std::round(e.delay0) * w_band <= 3.0)
+        e.delay0 = std::round(e.delay0);
+      e.scale_max = (3.0 / w_band) / e.delay0;
+      break;
+    }
+    case Kind::Sensor: {
+      const double fc_rel = clear ? d.log_uniform(0.5, 2.0) : d.log_uniform(3.0, 8.0);
+      e.order = d.coin() ? 1 : 2;
+      e.sensor_zeta = d.uniform(0.5, 0.9);
+      e.time_constant0 = 1.0 / (fc_rel * w_band);
+      e.scale_max = (4.0 / w_band) / e.time_constant0;  // cut-off down to a quarter of the band edge
+      break;
+    }
+    case Kind::Unmodelled: {
+      const double l0 = std::log(std::max(w_lo, kTwoPi * 2 / st.P)), l1 = std::log(0.95 * w_band);
+      double best = 0, best_sep = -1;
+      for (int tries = 0; tries < 200; ++tries) {
+        const double w = std::exp(d.uniform(l0, l1));
+        double sep = 1e300;
+        for (const Mode& m : base.modes) sep = std::min(sep, std::abs(std::log(w / m.omega)));
+        if (sep > best_sep) {
+          best_sep = sep;
+          best = w;
+        }
+        if (sep >= std::log(1.12)) break;
+      }
+      e.extra_omega = best;
+      e.extra_zeta = d.log_uniform(0.01, 0.1);
+      e.series = d.coin();
+      if (e.series) {
+        e.kappa0 = clear ? d.log_uniform(0.5, 3.0) : d.log_uniform(0.02, 0.1);
+        e.scale_max = std::min(20.0, 0.95 / e.extra_zeta - 1) / e.kappa0;
+      } else {
+        const double rho = clear ? d.log_uniform(0.2, 1.0) : d.log_uniform(0.01, 0.05);
+        const cplx unit = d.sign() * std::polar(1.0, -kPi / 2 + d.uniform(-0.4, 0.4));
+        const cplx qm = std::polar(1.0, -best);
+        const double unit_peak = std::abs(Mode{best, e.extra_zeta, unit}.section().at(qm));
+        Chain sim = make_chain(base, {});
+        e.extra_residue0 = unit * rho * std::abs(sim.plant_at(qm)) / unit_peak;
+        e.scale_max = 5.0 / rho;
+      }
+      break;
+    }
+    case Kind::Mismatch: {
+      e.mode = d.integer(0, static_cast<int>(base.modes.size()) - 1);
+      const Mode& m = base.modes[static_cast<std::size_t>(e.mode)];
+      const double u = d.unit();
+      const int type = u < 0.4 ? 0 : u < 0.6 ? 1 : 2;  // frequency, damping, both
+      if (type != 1) e.shift0 = d.sign() * (clear ? d.uniform(0.02, 0.08) : d.uniform(0.002, 0.01));
+      if (type != 0)
+        e.damping_log0 = d.sign() * (clear ? d.uniform(std::log(1.4), std::log(2.5)) : d.uniform(std::log(1.03), std::log(1.1)));
+      double smax = 1e300;
+      if (e.shift0 != 0) smax = std::min(smax, 0.25 / std::abs(e.shift0));
+      if (e.shift0 > 0) smax = std::min(smax, (0.95 * kPi / m.omega - 1) / e.shift0);
+      if (e.damping_log0 > 0) smax = std::min(smax, std::log(0.7 / m.zeta) / e.damping_log0);
+      if (e.damping_log0 < 0) smax = std::min(smax, std::log(0.002 / m.zeta) / e.damping_log0);
+      e.scale_max = std::max(1.0, smax);
+      break;
+    }
+    case Kind::Nonlinear: {
+      e.at_input = d.coin();
+      const double u = d.unit();
+      const int type = u < 1.0 / 3 ? 0 : u < 2.0 / 3 ? 1 : 2;  // quadratic, cubic, both
+      auto coef = [&] { return d.sign() * (clear ? d.log_uniform(0.02, 0.1) : d.log_uniform(0.002, 0.01)); };
+      if (type != 1) e.quad0 = coef();
+      if (type != 0) e.cubic0 = coef();
+      double ss = 0;
+      const std::vector<double>& x = e.at_input ? st.u : st.y_sim;
+      for (double v : x) ss += v * v;
+      e.reference_rms = std::sqrt(ss / static_cast<double>(x.size()));
+      e.scale_max = 0.5 / std::max(std::abs(e.quad0), std::abs(e.cubic0));
+      break;
+    }
+    case Kind::Leakage:
+      e.scale_max = 1.0;  // 1: from rest
+      break;
+  }
+}
+
+json effect_json(const Effect& e, const Base& base) {
+  const double s = e.scale;
+  json j;
+  switch (e.kind) {
+    case Kind::Gain: j["gain"] = 1 + s * (e.gain0 - 1); break;
+    case Kind::Delay: j["samples"] = s * e.delay0; break;
+    case Kind::Sensor:
+      j["order"] = e.order;
+      j["cutoff"] = 1.0 / (kTwoPi * s * e.time_constant0);  // cycles/sample
+      if (e.order == 2) j["damping"] = e.sensor_zeta;
+      break;
+    case Kind::Unmodelled:
+      j["connection"] = e.series ? "series" : "parallel";
+      j["frequency"] = e.extra_omega / kTwoPi;
+      j["damping"] = e.extra_zeta;
+      if (e.series) {
+        j["peak_ratio"] = 1 + s * e.kappa0;  // ζ_zero/ζ_pole: the bump's peak gain
+      } else {
+        j["residue"] = {(s * e.extra_residue0).real(), (s * e.extra_residue0).imag()};
+      }
+      break;
+    case Kind::Mismatch: {
+      const Mode& m = base.modes[static_cast<std::size_t>(e.mode)];
+      j["mode"] = e.mode;
+      j["frequency_sim"] = m.omega / kTwoPi;
+      j["frequency_true"] = m.omega * (1 + s * e.shift0) / kTwoPi;
+      j["frequency_shift"] = s * e.shift0;
+      j["damping_sim"] = m.zeta;
+      j["damping_true"] = m.zeta * std::exp(s * e.damping_log0);
+      j["damping_ratio"] = std::exp(s * e.damping_log0);
+      break;
+    }
+    case Kind::Nonlinear:
+      j["location"] = e.at_input ? "input" : "output";
+      j["quadratic"] = s * e.quad0;
+      j["cubic"] = s * e.cubic0;
+      j["reference_rms"] = e.reference_rms;
+      j["form"] = "x + quadratic x^2/r + cubic x^3/r^2";
+      break;
+    case Kind::Leakage:
+      j["initial_state"] = s == 1.0 ? "rest" : "partly settled";
+      j["transient_fraction"] = s;  // x(0) = (1 − s) x_ss(0)
+      break;
+  }
+  j["ratio"] = e.ratio;
+  j["target_ratio"] = e.target;
+  j["scale"] = s;
+  j["scale_max"] = e.scale_max;
+  j["lines"] = e.kind == Kind::Nonlinear ? "unexcited" : e.kind == Kind::Leakage ? "band (first period)" : "excited";
+  return j;
+}
+
+void validate_options(const GapCaseOptions& o) {
+  auto fail = [](const std::string& m) { throw Error(ErrorKind::Input, kWhere, m); };
+  if (o.period < 32 || o.period % 2 != 0 || o.period > (1 << 22))
+    fail("period P must be even and within 32 ... 2^22, got " + std::to_string(o.period));
+  if (o.periods < 2) fail("needs at least 2 periods, got " + std::to_string(o.periods));
+  if (static_cast<double>(o.period) * o.periods > static_cast<double>(1 << 26))
+    fail("P*M = " + std::to_string(static_cast<double>(o.period) * o.periods) + " samples exceeds 2^26");
+  if (o.effects.size() > 2) fail("at most 2 effects, got " + std::to_string(o.effects.size()));
+  std::set<std::string> seen;
+  for (const auto& n : o.effects) {
+    kind_of(n);
+    if (!seen.insert(n).second) fail("effect '" + n + "' given twice");
+  }
+  if (!o.effects.empty() && o.strength == Strength::None) fail("effects need strength subtle or clear, not none");
+}
+
+}  // namespace
+
+GapCase make_gap_case(const GapCaseOptions& o) {
+  validate_options(o);
+  Draw d(o.seed);
+  Draw dn(splitmix64(o.seed));  // the noise stream
+  const int P = o.period, M = o.periods;
+  const std::size_t bins = static_cast<std::size_t>(P / 2 + 1);
+  Fft fft(P);
+
+  // Excitation: random-odd multisine over odd lines 1 … K.
+  Setting st;
+  st.P = P;
+  st.M = M;
+  st.K = std::clamp(static_cast<int>(std::floor(d.uniform(0.15, 0.4) * P / 2)), 7, P / 2 - 1);
+  std::vector<int> odd;
+  for (int k = 1; k <= st.K; k += 2) odd.push_back(k);
+  std::vector<bool> excited(bins, false);
+  for (std::size_t g = 0; g < odd.size(); g += 4) {
+    const std::size_t size = std::min<std::size_t>(4, odd.size() - g);
+    const std::size_t skip = size == 4 ? static_cast<std::size_t>(d.integer(0, 3)) : size;
+    for (std::size_t i = 0; i < size; ++i)
+      if (i != skip) excited[static_cast<std::size_t>(odd[g + i])] = true;
+  }
+  for (int k = 1; k <= st.K; ++k) {
+    st.band.push_back(k);
+    (excited[static_cast<std::size_t>(k)] ? st.excited : st.unexcited_band).push_back(k);
+  }
+  const double F = static_cast<double>(st.excited.size());
+  const double amplitude = std::sqrt(P / (2 * F));  // Σ u² = 2 Σ |U(k)|² = P: RMS 1
+  st.U.assign(bins, 0.0);
+  for (int k : st.excited) st.U[static_cast<std::size_t>(k)] = std::polar(amplitude, kTwoPi * d.unit());
+  st.u = fft.inverse(st.U);
+  st.omega.resize(bins);
+  st.q.resize(bins);
+  for (std::size_t k = 0; k < bins; ++k) {
+    st.omega[k] = kTwoPi * static_cast<double>(k) / P;
+    st.q[k] = std::polar(1.0, -st.omega[k]);
+  }
+
+  // Simulation model, resonances inside the excited band.
+  const double w_band = kTwoPi * st.K / P;
+  const double w_lo = std::max(0.08 * w_band, kTwoPi * 2 / P), w_hi = 0.9 * w_band;
+  const Base base = draw_system(d, w_lo, w_hi);
+  {
+    const Chain sim = make_chain(base, {});
+    st.Hsim.resize(bins);
+    std::vector<cplx> Y(bins);
+    for (std::size_t k = 0; k < bins; ++k) {
+      st.Hsim[k] = sim.plant_at(st.q[k]);
+      Y[k] = st.Hsim[k] * st.U[k];
+    }
+    st.y_sim = fft.inverse(Y);
+  }
+
+  // Output-noise filter H_v, normalised to mean |H_v|² = 1 over the excited lines.
+  Section hv;
+  if (d.coin()) {
+    hv.b1 = d.uniform(-0.6, 0.6);
+    hv.a1 = -d.uniform(-0.3, 0.9);
+  } else {
+    const double r = d.uniform(0.3, 0.9), th = d.uniform(0, kPi);
+    hv.a1 = -2 * r * std::cos(th);
+    hv.a2 = r * r;
+    hv.b1 = d.uniform(-0.8, 0.8);
+  }
+  {
+    double mean = 0;
+    for (int k : st.excited) mean += std::norm(hv.at(st.q[static_cast<std::size_t>(k)]));
+    const double c = 1 / std::sqrt(mean / F);
+    hv.b0 *= c;
+    hv.b1 *= c;
+    hv.b2 *= c;
+  }
+  st.w.resize(bins);
+  for (std::size_t k = 0; k < bins; ++k) st.w[k] = std::norm(hv.at(st.q[k]));
+  double signal = 0;
+  for (int k : st.excited) signal += std::norm(st.Hsim[static_cast<std::size_t>(k)] * st.U[static_cast<std::size_t>(k)]);
+  signal /= F;
+
+  // Effects: draw, then calibrate noise level and magnitudes.
+  std::vector<Effect> effects;
+  for (const auto& n : o.effects) {
+    Effect e;
+    e.name = n;
+    e.kind = kind_of(n);
+    draw_effect(e, d, o.strength, base, st, w_lo, w_band);
+    const auto range = gap_ratio_range(o.strength);
+    e.target = d.log_uniform(range[0], range[1]);
+    effects.push_back(e);
+  }
+  Calibrator cal(base, st, fft);
+  const double nu_lo = signal * 1e-6, nu_hi = signal * 1e-2;  // SNR 60 … 20 dB
+  double nu;
+  if (effects.empty()) {
+    nu = signal / std::pow(10.0, d.uniform(2, 6));
+  } else {
+    double lsum = 0;
+    for (Effect& e : effects) lsum += std::log(cal.deviation(e, 1.0) / e.target);
+    nu = std::clamp(std::exp(lsum / static_cast<double>(effects.size())), nu_lo, nu_hi);
+    // The bracket [0, hi] of each effect's magnitude: hi = 1 (the draw) when it
+    // reaches the target, else the first of a grid over (1, scale_max] that
+    // does (the deviation need not grow monotonically, e.g. a mode moving
+    // across the lines); when none does, the noise is lowered (past 60 dB: snr_clamped).
+    std::vector<double> hi_of;
+    for (Effect& e : effects) {
+      double hi = std::min(1.0, e.scale_max), best = hi, Abest = cal.deviation(e, hi);
+      if (Abest < e.target * nu) {
+        for (int i = 1; i <= 32; ++i) {
+          const double s = hi + (e.scale_max - hi) * i / 32.0, A = cal.deviation(e, s);
+          if (A > Abest) {
+            Abest = A;
+            best = s;
+          }
+          if (A >= e.target * nu) break;
+        }
+        if (!(Abest > 0)) throw Error(ErrorKind::Numerical, kWhere, "effect " + e.name + " makes no deviation");
+        if (Abest < e.target * nu * (1 - 1e-9)) {
+          nu = Abest / e.target;
+        }
+        hi = best;
+      }
+      hi_of.push_back(hi);
+    }
+    for (std::size_t j = 0; j < effects.size(); ++j) {
+      Effect& e = effects[j];
+      double s = 1.0;
+      double A = cal.deviation(e, s);
+      if (!(e.scale_max >= 1.0 && std::abs(A / nu / e.target - 1) <= 1e-9)) {
+        double lo = 0, hi = hi_of[j];
+        for (int it = 0; it < 200; ++it) {
+          s = 0.5 * (lo + hi);
+          A = cal.deviation(e, s);
+          const double rel = A / nu / e.target - 1;
+          if (std::abs(rel) <= 1e-7 || hi - lo <= 1e-15 * hi_of[j]) break;
+          (rel < 0 ? lo : hi) = s;
+        }
+      }
+      e.scale = s;
+      e.ratio = cal.deviation(e, s, &e.line_ratio) / nu;
+      for (double& r : e.line_ratio) r /= nu;
+      e.lines = cal.lines(e);
+    }
+  }
+
+  const bool clamped = nu < nu_lo * (1 - 1e-9);  // the SNR had to exceed 60 dB
+
+  // The true system's record.
+  std::vector<const Effect*> ptrs;
+  for (const Effect& e : effects) ptrs.push_back(&e);
+  const Chain truth_chain = make_chain(base, ptrs);
+  const std::vector<cplx> Y = steady(truth_chain, st, fft, true);
+  const std::vector<double> y_ss = fft.inverse(Y);
+  const std::size_t N = static_cast<std::size_t>(P) * static_cast<std::size_t>(M);
+  std::vector<double> y0(N);
+  for (std::size_t t = 0; t < N; ++t) y0[t] = y_ss[t % static_cast<std::size_t>(P)];
+  double transient_energy = 0;
+  if (truth_chain.leak > 0) {
+    const std::vector<double> y_nd = fft.inverse(steady(truth_chain, st, fft, false));
+    const std::vector<double> tr = delay_transient(transient(truth_chain, st, y_nd, M + 1), y_nd, truth_chain.delay, N);
+    for (std::size_t t = 0; t < N; ++t) y0[t] += truth_chain.leak * tr[t];
+    for (int t = 0; t < P; ++t) transient_energy += std::pow(truth_chain.leak * tr[static_cast<std::size_t>(t)], 2);
+  }
+  double ratio_combined = 0;
+  for (int k : st.excited) {
+    const std::size_t i = static_cast<std::size_t>(k);
+    ratio_combined += std::norm(Y[i] - st.Hsim[i] * st.U[i]) * M / (nu * st.w[i]);
+  }
+  ratio_combined /= F;
+
+  // Noise: coloured output noise (stationary over the whole record), tiny input noise.
+  double input_var = 0;
+  if (d.coin()) {
+    double m = 1e300;
+    for (int k : st.excited) {
+      const std::size_t i = static_cast<std::size_t>(k);
+      m = std::min(m, nu * st.w[i] / std::max(std::norm(st.Hsim[i]), 1e-300));
+    }
+    input_var = d.log_uniform(1e-3, 1e-2) * m;
+  }
+  GapCase out;
+  out.record.resize(static_cast<Eigen::Index>(N), 2);
+  {
+    const std::size_t burn = 400;  // noise-filter poles have modulus ≤ 0.9
+    std::vector<double> e(N + burn), v;
+    for (double& x : e) x = std::sqrt(nu) * dn.normal();
+    hv.filter(e, v);
+    const double su = std::sqrt(input_var);
+    for (std::size_t t = 0; t < N; ++t) {
+      const Eigen::Index i = static_cast<Eigen::Index>(t);
+      const double nu_t = su * dn.normal();
+      out.record(i, 0) = st.u[t % static_cast<std::size_t>(P)] + (o.noise ? nu_t : 0.0);
+      out.record(i, 1) = y0[t] + (o.noise ? v[t + burn] : 0.0);
+    }
+  }
+
+  out.sim_model = realise(base);
+  out.meta.period = P;
+  out.meta.periods = M;
+  out.meta.sample_time = 1.0;
+  out.meta.excited_lines = st.excited;
+  out.effects = o.effects;
+
+  json details = json::object();
+  std::vector<std::array<double, 2>> all_bands;
+  for (const Effect& e : effects) {
+    json j = effect_json(e, base);
+    const auto b = bands_of(e.lines, e.line_ratio, P);
+    j["bands"] = bands_json(b);
+    all_bands.insert(all_bands.end(), b.begin(), b.end());
+    details[e.name] = j;
+  }
+  out.bands = merge_bands(all_bands);
+
+  json modes = json::array();
+  for (const Mode& m : base.modes)
+    modes.push_back({{"frequency", m.omega / kTwoPi},
+                     {"damping", m.zeta},
+                     {"damped_frequency", std::arg(m.pole()) / kTwoPi},
+                     {"residue", {m.residue.real(), m.residue.imag()}}});
+  json& t = out.truth;
+  t["effects"] = o.effects;
+  t["strength"] = effects.empty() ? "none" : to_string(o.strength);
+  t["seed"] = o.seed;
+  t["period"] = P;
+  t["periods"] = M;
+  t["bands"] = bands_json(out.bands);
+  t["snr_db"] = 10 * std::log10(signal / nu);
+  t["snr_clamped"] = clamped;
+  t["noise"] = {{"scale", nu},
+                {"filter", {{"b", {hv.b0, hv.b1, hv.b2}}, {"a", {1.0, hv.a1, hv.a2}}}},
+                {"input_std", std::sqrt(input_var)},
+                {"enabled", o.noise},
+                {"definition", "per-line variance of one period's unitary DFT = scale |H_v|^2; of the M-period mean: /M"}};
+  t["system"] = {{"modes", modes},
+                 {"real_pole", base.has_real ? json(base.real_pole) : json(nullptr)},
+                 {"real_residue", base.has_real ? json(base.real_residue) : json(nullptr)},
+                 {"D", base.D}};
+  t["excitation"] = {{"band_line", st.K}, {"lines", st.excited.size()}, {"rms", 1.0}};
+  t["ratio_combined"] = ratio_combined;
+  t["transient_energy_first_period"] = transient_energy;
+  t["details"] = details;
+  return out;
+}
+
+}  // namespace fdsid

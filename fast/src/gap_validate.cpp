@@ -1,0 +1,240 @@
+#include "fdsid/gap_validate.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <random>
+#include <sstream>
+#include <thread>
+
+#include "fdsid/error.hpp"
+#include "fdsid/gap_cases.hpp"
+#include "fdsid/io.hpp"
+
+namespace fdsid {
+namespace {
+
+std::string joined(std::vector<std::string> effects) {
+  if (effects.empty()) return "none";
+  std::sort(effects.begin(), effects.end());
+  std::string s;
+  for (const std::string& e : effects) s += (s.empty() ? "" : "+") + e;
+  return s;
+}
+
+// The i-th case of the schedule in gap_validate.hpp.
+GapCaseOptions schedule(const GapValidationOptions& o, int i, std::string& category) {
+  GapCaseOptions c;
+  c.period = o.period;
+  c.periods = o.periods;
+  c.seed = o.seed * 1000003ULL + static_cast<std::uint64_t>(i);
+  const std::vector<std::string>& names = gap_effect_names();
+  const int slot = i % 20;
+  if (slot < 2) {
+    category = "none";
+    c.strength = Strength::None;
+  } else if (slot < 9) {
+    category = "clear";
+    c.effects = {names[slot - 2]};
+    c.strength = Strength::Clear;
+  } else if (slot < 16) {
+    category = "subtle";
+    c.effects = {names[slot - 9]};
+    c.strength = Strength::Subtle;
+  } else {
+    category = "pair";
+    std::mt19937_64 g(c.seed ^ 0x9e3779b97f4a7c15ULL);
+    std::uniform_int_distribution<int> pick(0, static_cast<int>(names.size()) - 1);
+    const int a = pick(g);
+    int b = pick(g);
+    while (b == a) b = pick(g);
+    c.effects = {names[a], names[b]};
+    c.strength = Strength::Clear;
+  }
+  return c;
+}
+
+std::string record_csv(const Eigen::MatrixXd& rec) {
+  std::ostringstream csv;
+  csv << "u,y\n";
+  char buf[80];
+  for (Eigen::Index i = 0; i < rec.rows(); ++i) {
+    std::snprintf(buf, sizeof buf, "%.17g,%.17g\n", rec(i, 0), rec(i, 1));
+    csv << buf;
+  }
+  return csv.str();
+}
+
+// Makes case i, writes the user's three files, diagnoses from the files alone,
+// then scores.
+GapValidationCase run_case(const GapValidationOptions& o, int i, const std::filesystem::path& dir) {
+  GapValidationCase r;
+  r.index = i;
+  const GapCaseOptions co = schedule(o, i, r.category);
+  r.seed = co.seed;
+  const GapCase c = make_gap_case(co);
+  r.truth = joined(c.effects);
+  r.truth_bands = static_cast<int>(c.effects.empty() ? 0 : c.bands.size());
+  const std::filesystem::path d = dir / ("case" + std::to_string(i));
+  std::filesystem::create_directories(d);
+  const std::string model_path = (d / "model.json").string(), data_path = (d / "data.csv").string(),
+                    meta_path = (d / "meta.json").string();
+  write_text_file(model_path, model_to_json(c.sim_model).dump(2) + "\n");
+  write_text_file(data_path, record_csv(c.record));
+  const nlohmann::json mj = {{"period", c.meta.period},
+                             {"periods", c.meta.periods},
+                             {"sample_time", c.meta.sample_time},
+                             {"excited_lines", c.meta.excited_lines}};
+  write_text_file(meta_path, mj.dump() + "\n");
+  try {  // the diagnosis: the three files only
+    const StateSpace model = read_model(model_path);
+    int inputs = 0;
+    const Eigen::MatrixXd rec = read_records_csv(data_path, inputs);
+    const RecordMeta meta = read_meta(meta_path);
+    const GapReport rep = diagnose_gap(model, rec, inputs, meta, o.gap);
+    r.verdict = joined(rep.present);
+    r.gap_before = rep.gap_before;
+    r.gap_after = rep.gap_after;
+    const double Ts = meta.sample_time;
+    for (const auto& tb : c.bands) {  // truth in cycles/sample, report in Hz
+      bool hit = false;
+      for (const auto& b : rep.bands) hit = hit || (b[0] * Ts <= tb[1] && b[1] * Ts >= tb[0]);
+      r.bands_hit += hit && !c.effects.empty();
+    }
+  } catch (const Error& e) {
+    r.verdict = "error";
+    r.error = e.what();
+  }
+  r.correct = r.verdict == r.truth;
+  if (!o.keep_files) std::filesystem::remove_all(d);
+  return r;
+}
+
+}  // namespace
+
+GapValidation validate_gap(const GapValidationOptions& o) {
+  if (o.cases < 1) throw Error(ErrorKind::Input, "--cases", "must be at least 1");
+  namespace fs = std::filesystem;
+  fs::path dir = o.workdir.empty() ? fs::temp_directory_path() / ("fdsid-gap-validate-" + std::to_string(o.seed))
+                                   : fs::path(o.workdir);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw Error(ErrorKind::Input, "--workdir", "cannot create \"" + dir.string() + "\": " + ec.message());
+  GapValidation v;
+  v.cases = o.cases;
+  v.rows.resize(o.cases);
+  std::atomic<int> next{0}, done{0};
+  std::mutex mu;
+  std::string failure;
+  auto worker = [&] {
+    for (int i; (i = next++) < o.cases;) {
+      try {
+        v.rows[i] = run_case(o, i, dir);
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(mu);
+        if (failure.empty()) failure = "case " + std::to_string(i) + ": " + e.what();
+      }
+      const int d = ++done;
+      if (o.progress) {
+        std::lock_guard<std::mutex> lock(mu);
+        o.progress(d, o.cases);
+      }
+    }
+  };
+  const int threads = std::max(1, std::min(o.cases, o.threads > 0 ? o.threads
+                                                                    : static_cast<int>(std::thread::hardware_concurrency())));
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  for (std::thread& t : pool) t.join();
+  if (o.workdir.empty() && !o.keep_files) fs::remove_all(dir, ec);
+  if (!failure.empty()) throw Error(ErrorKind::Numerical, "gap-validate", failure);
+
+  int correct = 0, none = 0, alarms = 0, bands = 0, hits = 0;
+  for (const GapValidationCase& r : v.rows) {
+    correct += r.correct;
+    ++v.confusion[r.truth][r.verdict];
+    auto& c = v.by_category[r.category];
+    c[0] += r.correct;
+    ++c[1];
+    if (r.category == "none") {
+      ++none;
+      alarms += r.verdict != "none";
+    } else {
+      bands += r.truth_bands;
+      hits += r.bands_hit;
+      if (r.correct) v.gap_after_correct.push_back(r.gap_after);
+    }
+  }
+  std::sort(v.gap_after_correct.begin(), v.gap_after_correct.end());
+  v.accuracy = static_cast<double>(correct) / o.cases;
+  v.false_alarm_rate = none ? static_cast<double>(alarms) / none : 0.0;
+  v.band_hit_rate = bands ? static_cast<double>(hits) / bands : 0.0;
+  return v;
+}
+
+namespace {
+double rate(const GapValidation& v, const std::string& cat) {
+  const auto it = v.by_category.find(cat);
+  return it == v.by_category.end() || it->second[1] == 0 ? NAN : static_cast<double>(it->second[0]) / it->second[1];
+}
+double subtle_or_pair_rate(const GapValidation& v) {
+  int c = 0, n = 0;
+  for (const char* k : {"subtle", "pair"}) {
+    const auto it = v.by_category.find(k);
+    if (it != v.by_category.end()) {
+      c += it->second[0];
+      n += it->second[1];
+    }
+  }
+  return n ? static_cast<double>(c) / n : NAN;
+}
+double share_at_most_2(const GapValidation& v) {
+  if (v.gap_after_correct.empty()) return NAN;
+  return static_cast<double>(std::upper_bound(v.gap_after_correct.begin(), v.gap_after_correct.end(), 2.0) -
+                             v.gap_after_correct.begin()) /
+         v.gap_after_correct.size();
+}
+}  // namespace
+
+bool gap_validation_targets_met(const GapValidation& v) {
+  auto ok = [](double r, double target, bool above) { return std::isnan(r) || (above ? r >= target : r <= target); };
+  return ok(rate(v, "clear"), 0.95, true) && ok(subtle_or_pair_rate(v), 0.80, true) &&
+         ok(v.false_alarm_rate, 0.05, false) && ok(share_at_most_2(v), 1.0, true);
+}
+
+nlohmann::json gap_validation_to_json(const GapValidation& v) {
+  nlohmann::json j;
+  j["cases"] = v.cases;
+  j["accuracy"] = v.accuracy;
+  j["confusion"] = nlohmann::json::object();
+  for (const auto& t : v.confusion)
+    for (const auto& p : t.second) j["confusion"][t.first][p.first] = p.second;
+  for (const auto& c : v.by_category) j["by_category"][c.first] = {{"correct", c.second[0]}, {"cases", c.second[1]}};
+  j["clear_single_rate"] = rate(v, "clear");
+  j["subtle_or_pair_rate"] = subtle_or_pair_rate(v);
+  j["false_alarm_rate"] = v.false_alarm_rate;
+  j["band_hit_rate"] = v.band_hit_rate;
+  const auto& g = v.gap_after_correct;
+  auto q = [&](double p) { return g.empty() ? NAN : g[static_cast<size_t>(p * (g.size() - 1))]; };
+  j["gap_after_correct"] = {{"n", g.size()},     {"median", q(0.5)}, {"p90", q(0.9)},
+                            {"max", q(1.0)},      {"share_at_most_2", share_at_most_2(v)}};
+  j["targets"] = {{"clear_single_rate", ">= 0.95"},
+                  {"subtle_or_pair_rate", ">= 0.80"},
+                  {"false_alarm_rate", "<= 0.05"},
+                  {"gap_after_correct", "<= 2 on every correct verdict"},
+                  {"met", gap_validation_targets_met(v)}};
+  j["rows"] = nlohmann::json::array();
+  for (const GapValidationCase& r : v.rows) {
+    nlohmann::json row = {{"index", r.index},         {"seed", r.seed},           {"category", r.category},
+                          {"truth", r.truth},         {"verdict", r.verdict},     {"correct", r.correct},
+                          {"gap_before", r.gap_before}, {"gap_after", r.gap_after}, {"truth_bands", r.truth_bands},
+                          {"bands_hit", r.bands_hit}};
+    if (!r.error.empty()) row["error"] = r.error;
+    j["rows"].push_back(row);
+  }
+  return j;
+}
+
+}  // namespace fdsid

@@ -1,0 +1,321 @@
+// The case generator of the gap diagnosis' blind validation
+// (fdsid/gap_cases.hpp): determinism in the seed, exact periodic steady state
+// of the effect-free noise-free record, lines that carry only noise, the
+// calibration ratio recomputed independently from the noise-free record and
+// the noise filter in the truth, the noise level itself, the names, the errors.
+// Tolerances: rounding (1e-9 relative: a few FFTs and rational evaluations of
+// well-scaled systems) or Monte Carlo intervals stated beside each check.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <complex>
+#include <set>
+
+#include "fdsid/error.hpp"
+#include "fdsid/frf_id.hpp"
+#include "fdsid/gap_cases.hpp"
+#include "fdsid/model.hpp"
+
+namespace fdsid {
+namespace {
+
+GapCase make(std::vector<std::string> effects, Strength s, std::uint64_t seed, bool noise = true, int P = 1024,
+             int M = 8) {
+  GapCaseOptions o;
+  o.effects = std::move(effects);
+  o.strength = s;
+  o.seed = seed;
+  o.noise = noise;
+  o.period = P;
+  o.periods = M;
+  return make_gap_case(o);
+}
+
+std::vector<int> lines_upto(int k_max) {
+  std::vector<int> v;
+  for (int k = 1; k <= k_max; ++k) v.push_back(k);
+  return v;
+}
+
+/// Spectra of column `col`: [period][line].
+std::vector<std::vector<cplx>> spectra(const GapCase& c, int col, const std::vector<int>& lines) {
+  const Eigen::MatrixXd x = c.record.col(col);
+  const auto s = period_spectra(x, c.meta.period, c.meta.periods, lines);
+  std::vector<std::vector<cplx>> out(s.size());
+  for (std::size_t l = 0; l < s.size(); ++l)
+    for (const auto& v : s[l]) out[l].push_back(v(0));
+  return out;
+}
+
+std::vector<cplx> mean_over_periods(const std::vector<std::vector<cplx>>& s) {
+  std::vector<cplx> m(s[0].size(), 0.0);
+  for (const auto& p : s)
+    for (std::size_t i = 0; i < p.size(); ++i) m[i] += p[i] / static_cast<double>(s.size());
+  return m;
+}
+
+/// Per-line noise variance of one period's unitary DFT, from the truth: ν |H_v(e^{jω})|².
+double noise_variance(const GapCase& c, int k) {
+  const auto& f = c.truth["noise"]["filter"];
+  const cplx q = std::polar(1.0, -2 * M_PI * k / c.meta.period);
+  const cplx num = f["b"][0].get<double>() + q * (f["b"][1].get<double>() + q * f["b"][2].get<double>());
+  const cplx den = f["a"][0].get<double>() + q * (f["a"][1].get<double>() + q * f["a"][2].get<double>());
+  return c.truth["noise"]["scale"].get<double>() * std::norm(num / den);
+}
+
+cplx G(const GapCase& c, int k) {
+  return transfer(c.sim_model, std::polar(1.0, 2 * M_PI * k / c.meta.period))(0, 0);
+}
+
+bool is_excited(const GapCase& c, int k) {
+  return std::find(c.meta.excited_lines.begin(), c.meta.excited_lines.end(), k) != c.meta.excited_lines.end();
+}
+
+TEST(GapCases, DeterministicInTheSeed) {
+  for (const std::vector<std::string>& eff :
+       {std::vector<std::string>{}, {"delay", "unmodelled_mode"}, {"nonlinearity"}, {"leakage", "gain_error"}}) {
+    const GapCase a = make(eff, Strength::Clear, 42), b = make(eff, Strength::Clear, 42), c = make(eff, Strength::Clear, 43);
+    EXPECT_TRUE((a.record.array() == b.record.array()).all());
+    EXPECT_EQ(a.truth.dump(), b.truth.dump());
+    EXPECT_TRUE((a.sim_model.A.array() == b.sim_model.A.array()).all());
+    EXPECT_EQ(a.meta.excited_lines, b.meta.excited_lines);
+    EXPECT_EQ(a.bands, b.bands);
+    EXPECT_FALSE(a.record.rows() == c.record.rows() && (a.record.array() == c.record.array()).all());
+  }
+  // The testing hook changes nothing but the noise.
+  const GapCase n = make({"sensor_dynamics"}, Strength::Subtle, 7, true), q = make({"sensor_dynamics"}, Strength::Subtle, 7, false);
+  EXPECT_EQ(n.truth["details"].dump(), q.truth["details"].dump());
+  EXPECT_TRUE((n.sim_model.C.array() == q.sim_model.C.array()).all());
+}
+
+TEST(GapCases, SimulationModelIsStableMinimalDiscrete) {
+  for (std::uint64_t seed = 1; seed <= 30; ++seed) {
+    const GapCase c = make({}, Strength::None, seed, false);
+    const StateSpace& m = c.sim_model;
+    ASSERT_NO_THROW(validate(m));
+    EXPECT_EQ(m.domain, Domain::Discrete);
+    EXPECT_EQ(m.sample_time, 1.0);
+    EXPECT_GE(m.order(), 4);
+    EXPECT_LE(m.order(), 9);
+    const Eigen::VectorXcd p = poles(m);
+    for (Eigen::Index i = 0; i < p.size(); ++i) {
+      EXPECT_LT(std::abs(p(i)), 1.0);
+      for (Eigen::Index j = 0; j < i; ++j) EXPECT_GT(std::abs(p(i) - p(j)), 1e-6);
+      // PBH test: λ is controllable and observable.
+      const auto n = m.order();
+      Eigen::MatrixXcd Ao = Eigen::MatrixXcd::Zero(n + 1, n), Ac = Eigen::MatrixXcd::Zero(n, n + 1);
+      Ao.topRows(n) = m.A.cast<cplx>() - p(i) * Eigen::MatrixXcd::Identity(n, n);
+      Ao.bottomRows(1) = m.C.cast<cplx>();
+      Ac.leftCols(n) = m.A.cast<cplx>() - p(i) * Eigen::MatrixXcd::Identity(n, n);
+      Ac.rightCols(1) = m.B.cast<cplx>();
+      EXPECT_GT(Eigen::JacobiSVD<Eigen::MatrixXcd>(Ao).singularValues()(n - 1), 1e-10);
+      EXPECT_GT(Eigen::JacobiSVD<Eigen::MatrixXcd>(Ac).singularValues()(n - 1), 1e-10);
+    }
+    EXPECT_EQ(c.meta.period, 1024);
+    EXPECT_EQ(c.meta.periods, 8);
+    EXPECT_EQ(c.meta.sample_time, 1.0);
+    EXPECT_TRUE(c.bands.empty());
+    EXPECT_TRUE(c.effects.empty());
+  }
+}
+
+TEST(GapCases, RandomOddMultisine) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const GapCase c = make({}, Strength::None, seed, false);
+    const auto& ex = c.meta.excited_lines;
+    ASSERT_FALSE(ex.empty());
+    for (int k : ex) EXPECT_EQ(k % 2, 1);
+    // One line of every full group of 4 odd lines is left out.
+    const int K = c.truth["excitation"]["band_line"].get<int>();
+    std::vector<int> odd;
+    for (int k = 1; k <= K; k += 2) odd.push_back(k);
+    for (std::size_t g = 0; g + 4 <= odd.size(); g += 4) {
+      int n = 0;
+      for (std::size_t i = 0; i < 4; ++i) n += is_excited(c, odd[g + i]);
+      EXPECT_EQ(n, 3);
+    }
+    EXPECT_GE(K, 0.15 * 512 - 1);
+    EXPECT_LE(K, 0.4 * 512);
+    // RMS 1, flat amplitude.
+    const Eigen::VectorXd u = c.record.col(0).head(1024);
+    EXPECT_NEAR(std::sqrt(u.squaredNorm() / 1024), 1.0, 1e-12);
+    const auto U = spectra(c, 0, ex)[0];
+    for (const cplx& v : U) EXPECT_NEAR(std::abs(v), std::abs(U[0]), 1e-9 * std::abs(U[0]));
+  }
+}
+
+TEST(GapCases, EffectFreeNoiseFreeIsExactSteadyState) {
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    const GapCase c = make({}, Strength::None, seed, false, seed % 2 ? 1024 : 256, seed % 3 + 2);
+    const int P = c.meta.period, M = c.meta.periods;
+    for (int l = 1; l < M; ++l)
+      EXPECT_TRUE((c.record.middleRows(static_cast<Eigen::Index>(l) * P, P).array() == c.record.topRows(P).array()).all());
+    const auto all = lines_upto(P / 2 - 1);
+    const auto Y = spectra(c, 1, all)[0], U = spectra(c, 0, all)[0];
+    double ymax = 0;
+    for (int k : c.meta.excited_lines) ymax = std::max(ymax, std::abs(Y[static_cast<std::size_t>(k - 1)]));
+    for (int k : all) {
+      const std::size_t i = static_cast<std::size_t>(k - 1);
+      if (is_excited(c, k)) {
+        EXPECT_LT(std::abs(Y[i] - G(c, k) * U[i]), 1e-9 * ymax) << "seed " << seed << " line " << k;
+      } else {
+        EXPECT_LT(std::abs(Y[i]), 1e-12 * ymax) << "seed " << seed << " line " << k;
+        EXPECT_LT(std::abs(U[i]), 1e-12) << "seed " << seed << " line " << k;
+      }
+    }
+  }
+}
+
+TEST(GapCases, UnexcitedLinesCarryOnlyNoiseUnlessNonlinearityOrLeakage) {
+  for (const std::string& name : gap_effect_names())
+    for (std::uint64_t seed = 1; seed <= 4; ++seed) {
+      const GapCase c = make({name}, seed % 2 ? Strength::Clear : Strength::Subtle, seed, false);
+      const int P = c.meta.period;
+      const auto all = lines_upto(P / 2 - 1);
+      const auto S = spectra(c, 1, all);
+      double ymax = 0, unexcited = 0, unexcited_first = 0;
+      for (int k : c.meta.excited_lines) ymax = std::max(ymax, std::abs(S.back()[static_cast<std::size_t>(k - 1)]));
+      for (int k : all)
+        if (!is_excited(c, k)) {
+          unexcited = std::max(unexcited, std::abs(S.back()[static_cast<std::size_t>(k - 1)]));
+          unexcited_first = std::max(unexcited_first, std::abs(S.front()[static_cast<std::size_t>(k - 1)]));
+        }
+      if (name == "nonlinearity") {
+        EXPECT_GT(unexcited, 1e-8 * ymax) << name << " seed " << seed;
+      } else if (name == "leakage") {
+        EXPECT_GT(unexcited_first, 1e-8 * ymax) << name << " seed " << seed;
+      } else {
+        EXPECT_LT(unexcited, 1e-12 * ymax) << name << " seed " << seed;
+        EXPECT_LT(unexcited_first, 1e-12 * ymax) << name << " seed " << seed;
+      }
+    }
+}
+
+/// The calibration ratio of one effect alone, recomputed from the noise-free record.
+double recomputed_ratio(const GapCase& c, const std::string& name) {
+  const int M = c.meta.periods, K = c.truth["excitation"]["band_line"].get<int>();
+  const auto band = lines_upto(K);
+  const auto Ys = spectra(c, 1, band), Us = spectra(c, 0, band);
+  const auto Y = mean_over_periods(Ys), U = mean_over_periods(Us);
+  double sum = 0;
+  int n = 0;
+  for (int k : band) {
+    const std::size_t i = static_cast<std::size_t>(k - 1);
+    const double var = noise_variance(c, k);
+    if (name == "nonlinearity") {
+      if (is_excited(c, k)) continue;
+      sum += std::norm(Y[i]) * M / var;
+    } else if (name == "leakage") {
+      sum += std::norm(Ys[0][i] - G(c, k) * Us[0][i]) / var;
+    } else {
+      if (!is_excited(c, k)) continue;
+      sum += std::norm(Y[i] - G(c, k) * U[i]) * M / var;
+    }
+    ++n;
+  }
+  return sum / n;
+}
+
+TEST(GapCases, CalibrationRatioInsideTheRequestedRange) {
+  for (const Strength s : {Strength::Subtle, Strength::Clear}) {
+    const auto range = gap_ratio_range(s);
+    for (const std::string& name : gap_effect_names())
+      for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+        const GapCase c = make({name}, s, 100 * seed + 3, false);
+        const double r = c.truth["details"][name]["ratio"].get<double>();
+        EXPECT_GE(r, range[0] * (1 - 1e-6)) << name << " " << to_string(s) << " seed " << seed;
+        EXPECT_LE(r, range[1] * (1 + 1e-6)) << name << " " << to_string(s) << " seed " << seed;
+        EXPECT_NEAR(r, c.truth["details"][name]["target_ratio"].get<double>(), 1e-6 * r);
+        // Independent recomputation from the record and the noise filter in the truth.
+        EXPECT_NEAR(recomputed_ratio(c, name), r, 1e-6 * r) << name << " " << to_string(s) << " seed " << seed;
+        EXPECT_FALSE(c.bands.empty());
+        for (const auto& b : c.bands) {
+          EXPECT_LE(0.0, b[0]);
+          EXPECT_LT(b[0], b[1]);
+          EXPECT_LE(b[1], 0.5);
+        }
+        const double snr = c.truth["snr_db"].get<double>();
+        if (!c.truth["snr_clamped"].get<bool>()) {
+          EXPECT_GE(snr, 20 - 1e-9);
+          EXPECT_LE(snr, 60 + 1e-9);
+        }
+      }
+  }
+}
+
+TEST(GapCases, PairsCalibrateEachEffect) {
+  const auto& names = gap_effect_names();
+  std::uint64_t seed = 1;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    for (std::size_t j = i + 1; j < names.size(); ++j, ++seed) {
+      const Strength s = seed % 2 ? Strength::Clear : Strength::Subtle;
+      const auto range = gap_ratio_range(s);
+      const GapCase c = make({names[i], names[j]}, s, seed);
+      EXPECT_EQ(c.effects, (std::vector<std::string>{names[i], names[j]}));
+      for (const auto& n : c.effects) {
+        const double r = c.truth["details"][n]["ratio"].get<double>();
+        EXPECT_GE(r, range[0] * (1 - 1e-6)) << n;
+        EXPECT_LE(r, range[1] * (1 + 1e-6)) << n;
+      }
+      EXPECT_TRUE(c.record.allFinite());
+    }
+}
+
+TEST(GapCases, NoiseDiffersPerPeriodAndHasTheStatedLevel) {
+  // For effect-free cases, the sample mean over M periods at the unexcited
+  // lines 1 … P/2−1 is noise alone: E|Ȳ(k)|² = σ²(k)/M. Averaged over the
+  // ≈ 450 lines of a case and 10 cases, |Ȳ|²·M/σ² has mean 1 with a standard
+  // error ≈ 1/√4500 = 0.015 (plus the window's O(1/P) bias): ±0.1 is > 6 σ.
+  double sum = 0;
+  int n = 0;
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    const GapCase c = make({}, Strength::None, seed, true);
+    const int P = c.meta.period, M = c.meta.periods;
+    EXPECT_FALSE((c.record.col(1).head(P).array() == c.record.col(1).segment(P, P).array()).all());
+    const auto all = lines_upto(P / 2 - 1);
+    const auto Y = mean_over_periods(spectra(c, 1, all));
+    for (int k : all)
+      if (!is_excited(c, k)) {
+        sum += std::norm(Y[static_cast<std::size_t>(k - 1)]) * M / noise_variance(c, k);
+        ++n;
+      }
+  }
+  EXPECT_NEAR(sum / n, 1.0, 0.1);
+}
+
+TEST(GapCases, NamesAndErrors) {
+  for (const std::string& name : gap_effect_names()) EXPECT_NO_THROW(make({name}, Strength::Subtle, 5, true, 64, 2));
+  auto expect_input = [](const GapCaseOptions& o) {
+    try {
+      make_gap_case(o);
+      ADD_FAILURE() << "no error";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Input) << e.what();
+    }
+  };
+  GapCaseOptions o;
+  o.effects = {"friction"};
+  expect_input(o);
+  o.effects = {"delay", "delay"};
+  expect_input(o);
+  o.effects = {"delay", "leakage", "gain_error"};
+  expect_input(o);
+  o.effects = {"delay"};
+  o.strength = Strength::None;
+  expect_input(o);
+  o.strength = Strength::Clear;
+  o.period = 1023;
+  expect_input(o);
+  o.period = 16;
+  expect_input(o);
+  o.period = 1024;
+  o.periods = 1;
+  expect_input(o);
+  o.periods = 0;
+  expect_input(o);
+}
+
+// Speed lives in bench/bench_gap.cpp (the brief: no timed unit tests).
+
+}  // namespace
+}  // namespace fdsid
