@@ -375,17 +375,8 @@ int run_simulate_records(const std::string& model_path, fdsid::RecordOptions o, 
   const fdsid::StateSpace model = fdsid::read_model(model_path);
   fdsid::RecordMeta meta;
   const Eigen::MatrixXd rec = fdsid::simulate_periodic_record(model, o, meta);
-  std::ostringstream csv;
-  csv << "u,y\n";
-  char buf[80];
-  for (Eigen::Index i = 0; i < rec.rows(); ++i) {
-    std::snprintf(buf, sizeof buf, "%.17g,%.17g\n", rec(i, 0), rec(i, 1));
-    csv << buf;
-  }
-  json mj = {{"period", meta.period}, {"periods", meta.periods}, {"sample_time", meta.sample_time},
-             {"excited_lines", meta.excited_lines}};
-  fdsid::write_text_file(out_path, csv.str());
-  fdsid::write_text_file(meta_path, mj.dump(2) + "\n");
+  fdsid::write_text_file(out_path, fdsid::records_csv(rec));
+  fdsid::write_text_file(meta_path, fdsid::meta_to_json(meta).dump(2) + "\n");
   return 0;
 }
 

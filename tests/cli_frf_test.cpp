@@ -31,6 +31,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_harness.hpp"
+#include "gap_systems.hpp"
 
 #include <Eigen/Dense>
 
@@ -487,19 +488,7 @@ TEST_F(CliFrf, ReproduceFiguresJsonToStdout) {
 // gap and gap-validate (CONTRACTS.md "fdsid gap report")
 
 // The plant with its output one sample late: G'(z) = z⁻¹ G(z).
-std::string delayed_plant_json() {
-  const fdsid::StateSpace g = pintelon_plant();
-  fdsid::StateSpace d = g;
-  d.A = Eigen::MatrixXd::Zero(5, 5);
-  d.A.topLeftCorner(4, 4) = g.A;
-  d.A.block(4, 0, 1, 4) = g.C;
-  d.B.resize(5, 1);
-  d.B << g.B, g.D;
-  d.C = Eigen::MatrixXd::Zero(1, 5);
-  d.C(0, 4) = 1;
-  d.D.setZero();
-  return fdsid::model_to_json(d).dump();
-}
+std::string delayed_plant_json() { return fdsid::model_to_json(fdsid::testing::one_sample_delay(pintelon_plant())).dump(); }
 
 void expect_gap_fields(const json& j) {
   for (const char* key : {"gap_before", "gap_after", "present", "bands", "candidates"})

@@ -15,6 +15,7 @@
 #include "fdsid/gap.hpp"
 #include "fdsid/paper.hpp"
 #include "fdsid/simulate.hpp"
+#include "gap_systems.hpp"
 
 namespace fdsid {
 namespace {
@@ -55,22 +56,6 @@ RecordOptions options(std::uint64_t seed, double noise = 0.01) {
   o.output_noise_std = noise;
   o.seed = seed;
   return o;
-}
-
-// The plant with its output delayed by one sample: y(t) = y₀(t − 1), i.e.
-// G'(z) = z⁻¹ G(z) (one extra state holding C x + D u).
-StateSpace delayed(const StateSpace& g) {
-  const int n = g.order();
-  StateSpace d = g;
-  d.A = Eigen::MatrixXd::Zero(n + 1, n + 1);
-  d.A.topLeftCorner(n, n) = g.A;
-  d.A.block(n, 0, 1, n) = g.C;
-  d.B.resize(n + 1, 1);
-  d.B << g.B, g.D;
-  d.C = Eigen::MatrixXd::Zero(1, n + 1);
-  d.C(0, n) = 1;
-  d.D.setZero();
-  return d;
 }
 
 // The plant plus a parallel resonance at `f` cycles/sample, damping ratio 0.02.
@@ -145,7 +130,7 @@ TEST(GapDiagnosis, GainError) {
 TEST(GapDiagnosis, OneSampleDelay) {
   const StateSpace g = pintelon_plant();
   RecordMeta meta;
-  const Eigen::MatrixXd rec = simulate_periodic_record(delayed(g), options(8), meta);
+  const Eigen::MatrixXd rec = simulate_periodic_record(testing::one_sample_delay(g), options(8), meta);
   const GapReport r = diagnose_gap(g, rec, 1, meta);
   SCOPED_TRACE(verdict(r));
   EXPECT_EQ(r.present, std::vector<std::string>{"delay"});

@@ -12,6 +12,7 @@
 #include "fdsid/reference/frf_id.hpp"
 #include "fdsid/reference/gap.hpp"
 #include "fdsid/simulate.hpp"
+#include "gap_systems.hpp"
 
 namespace fdsid {
 namespace {
@@ -113,15 +114,7 @@ TEST(GapVsReference, FittedGainAndDelayGiveTheReportedGapAfter) {
       truth.B *= 0.9;
       truth.D *= 0.9;
     } else {  // y(t) = y0(t - 1)
-      const int n = g.order();
-      truth.A = Eigen::MatrixXd::Zero(n + 1, n + 1);
-      truth.A.topLeftCorner(n, n) = g.A;
-      truth.A.block(n, 0, 1, n) = g.C;
-      truth.B.resize(n + 1, 1);
-      truth.B << g.B, g.D;
-      truth.C = Eigen::MatrixXd::Zero(1, n + 1);
-      truth.C(0, n) = 1;
-      truth.D.setZero();
+      truth = testing::one_sample_delay(g);
     }
     const Case c = make(truth, 4 + which);
     const GapReport fast = diagnose_gap(g, c.rec, 1, c.meta);

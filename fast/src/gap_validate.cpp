@@ -56,17 +56,6 @@ GapCaseOptions schedule(const GapValidationOptions& o, int i, std::string& categ
   return c;
 }
 
-std::string record_csv(const Eigen::MatrixXd& rec) {
-  std::ostringstream csv;
-  csv << "u,y\n";
-  char buf[80];
-  for (Eigen::Index i = 0; i < rec.rows(); ++i) {
-    std::snprintf(buf, sizeof buf, "%.17g,%.17g\n", rec(i, 0), rec(i, 1));
-    csv << buf;
-  }
-  return csv.str();
-}
-
 // Makes case i, writes the user's three files, diagnoses from the files alone,
 // then scores.
 GapValidationCase run_case(const GapValidationOptions& o, int i, const std::filesystem::path& dir) {
@@ -82,12 +71,8 @@ GapValidationCase run_case(const GapValidationOptions& o, int i, const std::file
   const std::string model_path = (d / "model.json").string(), data_path = (d / "data.csv").string(),
                     meta_path = (d / "meta.json").string();
   write_text_file(model_path, model_to_json(c.sim_model).dump(2) + "\n");
-  write_text_file(data_path, record_csv(c.record));
-  const nlohmann::json mj = {{"period", c.meta.period},
-                             {"periods", c.meta.periods},
-                             {"sample_time", c.meta.sample_time},
-                             {"excited_lines", c.meta.excited_lines}};
-  write_text_file(meta_path, mj.dump() + "\n");
+  write_text_file(data_path, records_csv(c.record));
+  write_text_file(meta_path, meta_to_json(c.meta).dump() + "\n");
   try {  // the diagnosis: the three files only
     const StateSpace model = read_model(model_path);
     int inputs = 0;

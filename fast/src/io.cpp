@@ -415,6 +415,24 @@ nlohmann::json frf_result_to_json(const FrfResult& r, const std::string& method)
   return j;
 }
 
+std::string records_csv(const Eigen::MatrixXd& samples) {
+  std::ostringstream csv;
+  csv << "u,y\n";
+  char buf[80];
+  for (Eigen::Index i = 0; i < samples.rows(); ++i) {
+    std::snprintf(buf, sizeof buf, "%.17g,%.17g\n", samples(i, 0), samples(i, 1));
+    csv << buf;
+  }
+  return csv.str();
+}
+
+nlohmann::json meta_to_json(const RecordMeta& meta) {
+  return {{"period", meta.period},
+          {"periods", meta.periods},
+          {"sample_time", meta.sample_time},
+          {"excited_lines", meta.excited_lines}};
+}
+
 void write_text_file(const std::string& path, const std::string& text) {
   if (path == "-") {
     std::cout << text;

@@ -42,10 +42,13 @@ FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain);
 /// `inputs` = q.
 Eigen::MatrixXd read_records_csv(const std::string& path, int& inputs);
 Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int& inputs);
+/// The SISO records CSV text (header u,y; %.17g, so a double reads back exactly).
+std::string records_csv(const Eigen::MatrixXd& samples);
 
 /// Meta JSON: {"period": P, "periods": M, "sample_time": Ts, "excited_lines": [k, …]}.
 RecordMeta read_meta(const std::string& path);
 RecordMeta meta_from_json(const nlohmann::json& j, const std::string& where);
+nlohmann::json meta_to_json(const RecordMeta& meta);
 
 /// Identified-model JSON of identify-frf: the model plus order, method, r,
 /// singular values (those the order was read from), poles, V_SUB and the r scan.
