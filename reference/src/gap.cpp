@@ -21,22 +21,6 @@ std::string fmt(const Real& x, int digits = 6) { return x.str(digits, std::ios_b
 
 bool finite(const Real& x) { return (boost::multiprecision::isfinite)(x); }
 
-std::string trim(const std::string& text) {
-  std::size_t begin = 0, end = text.size();
-  while (begin < end && std::isspace(static_cast<unsigned char>(text[begin]))) ++begin;
-  while (end > begin && std::isspace(static_cast<unsigned char>(text[end - 1]))) --end;
-  return text.substr(begin, end - begin);
-}
-
-std::vector<std::string> split_csv(const std::string& line) {
-  std::vector<std::string> cells;
-  std::stringstream stream(line);
-  std::string cell;
-  while (std::getline(stream, cell, ',')) cells.push_back(trim(cell));
-  if (!line.empty() && line.back() == ',') cells.push_back("");
-  return cells;
-}
-
 // Ē, s², t and p at the lines of `which` (index `offset` … into the spectra).
 LineStatistics line_statistics(const std::vector<std::vector<MatrixC>>& spectra, std::size_t offset,
                                const std::vector<int>& lines,
@@ -156,45 +140,6 @@ GapStatistic gap_statistic(const std::vector<Real>& u, const std::vector<Real>& 
     return frequency_response(model, scale * Real(k))(0, 0);
   };
   return gap_statistic(u, y, period, periods, excited_lines, unexcited_lines, response);
-}
-
-Records read_records_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open");
-  auto fail = [&](int line, const std::string& what) {
-    throw InputError(path + ":" + std::to_string(line) + ": " + what);
-  };
-  std::string line;
-  int line_number = 0;
-  std::vector<std::string> header;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (!trim(line).empty()) {
-      header = split_csv(trim(line));
-      break;
-    }
-  }
-  if (header != std::vector<std::string>{"u", "y"})
-    fail(line_number, "header must be u,y (one input, one output)");
-  Records records;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (trim(line).empty()) continue;
-    const std::vector<std::string> cells = split_csv(trim(line));
-    if (cells.size() != 2) fail(line_number, std::to_string(cells.size()) + " cells, header has 2");
-    Real values[2];
-    for (int c = 0; c < 2; ++c) {
-      try {
-        values[c] = parse_decimal(cells[c]);
-      } catch (const InputError& e) {
-        fail(line_number, "column " + header[c] + ": " + e.what());
-      }
-    }
-    records.u.push_back(values[0]);
-    records.y.push_back(values[1]);
-  }
-  if (records.u.empty()) fail(line_number, "no samples");
-  return records;
 }
 
 }  // namespace fdsid::reference

@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 namespace fdsid::reference {
@@ -140,6 +141,53 @@ std::vector<std::string> spectrum_header(int m) {
   return names;
 }
 
+
+using Fail = std::function<void(int, const std::string&)>;
+
+// The one reader of the decimal CSV formats (spectra, FRF, records): the first
+// non-blank line is the header, which `header` checks and maps to the column
+// names used in messages; every further non-blank line must have as many
+// cells, each parsed exactly by parse_decimal, and goes to `row`. Errors throw
+// InputError "<path>:<line>: …". Returns the last line number read.
+int read_decimal_csv(const std::string& path,
+                     const std::function<std::vector<std::string>(const std::vector<std::string>&, int, const Fail&)>& header,
+                     const std::function<void(const std::vector<Real>&, const std::vector<std::string>&, int, const Fail&)>& row) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open");
+  const Fail fail = [&](int line, const std::string& what) {
+    throw InputError(path + ":" + std::to_string(line) + ": " + what);
+  };
+  std::string line;
+  int line_number = 0;
+  std::vector<std::string> names;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (!trim(line).empty()) {
+      names = split_csv(trim(line));
+      break;
+    }
+  }
+  names = header(names, line_number, fail);
+  const std::size_t cols = names.size();
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (trim(line).empty()) continue;
+    const std::vector<std::string> cells = split_csv(trim(line));
+    if (cells.size() != cols)
+      fail(line_number, std::to_string(cells.size()) + " cells, header has " + std::to_string(cols));
+    std::vector<Real> values(cols);
+    for (std::size_t c = 0; c < cols; ++c) {
+      try {
+        values[c] = parse_decimal(cells[c]);
+      } catch (const InputError& e) {
+        fail(line_number, "column " + names[c] + ": " + e.what());
+      }
+    }
+    row(values, cells, line_number, fail);
+  }
+  return line_number;
+}
+
 }  // namespace
 
 Real parse_decimal(const std::string& text) {
@@ -231,66 +279,44 @@ json result_to_json(const Result& result, bool van_overschee, int digits) {
 }
 
 Spectrum read_spectrum_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open");
-  auto fail = [&](int line, const std::string& what) {
-    throw InputError(path + ":" + std::to_string(line) + ": " + what);
-  };
-  std::string line;
-  int line_number = 0;
-  std::vector<std::string> header;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (!trim(line).empty()) {
-      header = split_csv(trim(line));
-      break;
-    }
-  }
-  if (header.empty()) fail(line_number, "empty file, expected header omega,S_re,S_im,...");
-  const int header_line = line_number;
-  // 1 + 2m² columns.
-  const std::size_t cols = header.size();
-  int m = 0;
-  while (1 + 2 * static_cast<std::size_t>(m + 1) * (m + 1) <= cols) ++m;
-  if (m < 1 || 1 + 2 * static_cast<std::size_t>(m) * m != cols)
-    fail(header_line, std::to_string(cols) + " columns; expected 1 + 2m^2 (omega,S_re,S_im for m = 1)");
-  const std::vector<std::string> expected = spectrum_header(m);
-  bool matches = header == expected;
-  if (!matches && m == 1) matches = header == std::vector<std::string>{"omega", "S11_re", "S11_im"};
-  if (!matches) {
-    std::string want;
-    for (const std::string& name : expected) want += (want.empty() ? "" : ",") + name;
-    fail(header_line, "header must be " + want);
-  }
-
   std::vector<Real> omega;
   std::vector<int> omega_line;
   Spectrum spectrum;
+  int m = 0;
+  const int line_number = read_decimal_csv(
+      path,
+      [&](const std::vector<std::string>& header, int header_line, const Fail& fail) {
+        if (header.empty()) fail(header_line, "empty file, expected header omega,S_re,S_im,...");
+        // 1 + 2m² columns.
+        const std::size_t cols = header.size();
+        while (1 + 2 * static_cast<std::size_t>(m + 1) * (m + 1) <= cols) ++m;
+        if (m < 1 || 1 + 2 * static_cast<std::size_t>(m) * m != cols)
+          fail(header_line, std::to_string(cols) + " columns; expected 1 + 2m^2 (omega,S_re,S_im for m = 1)");
+        const std::vector<std::string> expected = spectrum_header(m);
+        bool matches = header == expected;
+        if (!matches && m == 1) matches = header == std::vector<std::string>{"omega", "S11_re", "S11_im"};
+        if (!matches) {
+          std::string want;
+          for (const std::string& name : expected) want += (want.empty() ? "" : ",") + name;
+          fail(header_line, "header must be " + want);
+        }
+        return expected;
+      },
+      [&](const std::vector<Real>& values, const std::vector<std::string>&, int line, const Fail&) {
+        MatrixC S(m, m);
+        for (int a = 0; a < m; ++a)
+          for (int b = 0; b < m; ++b) {
+            const std::size_t c = 1 + 2 * static_cast<std::size_t>(a * m + b);
+            S(a, b) = Complex(values[c], values[c + 1]);
+          }
+        omega.push_back(values[0]);
+        omega_line.push_back(line);
+        spectrum.S.push_back(S);
+      });
   spectrum.m = m;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (trim(line).empty()) continue;
-    const std::vector<std::string> cells = split_csv(trim(line));
-    if (cells.size() != cols)
-      fail(line_number, std::to_string(cells.size()) + " cells, header has " + std::to_string(cols));
-    std::vector<Real> values(cols);
-    for (std::size_t c = 0; c < cols; ++c) {
-      try {
-        values[c] = parse_decimal(cells[c]);
-      } catch (const InputError& e) {
-        fail(line_number, "column " + expected[c] + ": " + e.what());
-      }
-    }
-    MatrixC S(m, m);
-    for (int a = 0; a < m; ++a)
-      for (int b = 0; b < m; ++b) {
-        const std::size_t c = 1 + 2 * static_cast<std::size_t>(a * m + b);
-        S(a, b) = Complex(values[c], values[c + 1]);
-      }
-    omega.push_back(values[0]);
-    omega_line.push_back(line_number);
-    spectrum.S.push_back(S);
-  }
+  auto fail = [&](int line, const std::string& what) {
+    throw InputError(path + ":" + std::to_string(line) + ": " + what);
+  };
   if (spectrum.S.size() < 2)
     fail(line_number, "need at least 2 samples (M >= 1), got " + std::to_string(spectrum.S.size()));
   spectrum.M = static_cast<int>(spectrum.S.size()) - 1;
@@ -340,53 +366,45 @@ void write_spectrum_csv(const Spectrum& spectrum, const std::string& path, int d
 }
 
 FrfData read_frf_csv(const std::string& path, const std::string& domain) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path + ": cannot open");
-  auto fail = [&](int line, const std::string& what) {
-    throw InputError(path + ":" + std::to_string(line) + ": " + what);
-  };
   if (domain != "discrete" && domain != "continuous")
     throw InputError(path + ": domain \"" + domain + "\" is neither discrete nor continuous");
-  std::string line;
-  int line_number = 0;
-  std::vector<std::string> header;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (!trim(line).empty()) {
-      header = split_csv(trim(line));
-      break;
-    }
-  }
-  const std::vector<std::string> plain = {"omega", "G_re", "G_im"};
-  const std::vector<std::string> with_var = {"omega", "G_re", "G_im", "G_var"};
-  if (header != plain && header != with_var)
-    fail(line_number, "header must be omega,G_re,G_im or omega,G_re,G_im,G_var");
-  const std::size_t cols = header.size();
   FrfData data;
   data.domain = domain;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (trim(line).empty()) continue;
-    const std::vector<std::string> cells = split_csv(trim(line));
-    if (cells.size() != cols)
-      fail(line_number, std::to_string(cells.size()) + " cells, header has " + std::to_string(cols));
-    std::vector<Real> values(cols);
-    for (std::size_t c = 0; c < cols; ++c) {
-      try {
-        values[c] = parse_decimal(cells[c]);
-      } catch (const InputError& e) {
-        fail(line_number, "column " + header[c] + ": " + e.what());
-      }
-    }
-    const Real variance = cols == 4 ? values[3] : Real(1);
-    if (!(variance > 0)) fail(line_number, "G_var = " + cells[3] + " is not > 0");
-    data.omega.push_back(values[0]);
-    data.U.push_back(MatrixC::Constant(1, 1, Complex(1)));
-    data.Y.push_back(MatrixC::Constant(1, 1, Complex(values[1], values[2])));
-    data.variance.push_back(MatrixR::Constant(1, 1, variance));
-  }
-  if (data.omega.empty()) fail(line_number, "no samples");
+  const int line_number = read_decimal_csv(
+      path,
+      [](const std::vector<std::string>& header, int line, const Fail& fail) {
+        const std::vector<std::string> plain = {"omega", "G_re", "G_im"};
+        const std::vector<std::string> with_var = {"omega", "G_re", "G_im", "G_var"};
+        if (header != plain && header != with_var)
+          fail(line, "header must be omega,G_re,G_im or omega,G_re,G_im,G_var");
+        return header;
+      },
+      [&](const std::vector<Real>& values, const std::vector<std::string>& cells, int line, const Fail& fail) {
+        const Real variance = values.size() == 4 ? values[3] : Real(1);
+        if (!(variance > 0)) fail(line, "G_var = " + cells[3] + " is not > 0");
+        data.omega.push_back(values[0]);
+        data.U.push_back(MatrixC::Constant(1, 1, Complex(1)));
+        data.Y.push_back(MatrixC::Constant(1, 1, Complex(values[1], values[2])));
+        data.variance.push_back(MatrixR::Constant(1, 1, variance));
+      });
+  if (data.omega.empty()) throw InputError(path + ":" + std::to_string(line_number) + ": no samples");
   return data;
+}
+
+Records read_records_csv(const std::string& path) {
+  Records records;
+  const int line_number = read_decimal_csv(
+      path,
+      [](const std::vector<std::string>& header, int line, const Fail& fail) {
+        if (header != std::vector<std::string>{"u", "y"}) fail(line, "header must be u,y (one input, one output)");
+        return header;
+      },
+      [&](const std::vector<Real>& values, const std::vector<std::string>&, int, const Fail&) {
+        records.u.push_back(values[0]);
+        records.y.push_back(values[1]);
+      });
+  if (records.u.empty()) throw InputError(path + ":" + std::to_string(line_number) + ": no samples");
+  return records;
 }
 
 }  // namespace fdsid::reference

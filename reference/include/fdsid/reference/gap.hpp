@@ -8,6 +8,7 @@
 // Eq. (4) in 50-digit arithmetic (u ≈ 1e-50): no FFT, slow is fine.
 #pragma once
 
+#include "fdsid/reference/io.hpp"  // read_records_csv
 #include "fdsid/reference/spectrum_id.hpp"
 
 #include <functional>
@@ -90,18 +91,5 @@ GapStatistic gap_statistic(const std::vector<Real>& u, const std::vector<Real>& 
 /// Survival function of F(2, 2M−2): P[F > t] = (1 + t/(M−1))^{−(M−1)} (derived
 /// above). Throws InputError for M < 2 or t < 0.
 Real gap_p_value(const Real& t, int M);
-
-/// One SISO periodic input/output record (CONTRACTS.md "Periodic input/output
-/// records"), every sample parsed exactly from its decimal text.
-struct Records {
-  std::vector<Real> u, y;
-};
-
-/// Reads the records CSV: header `u,y`, then one row `u,y` per sample (blank
-/// lines skipped), each cell parsed exactly by parse_decimal (io.hpp), no
-/// binary double in between. Throws InputError "<path>:<line>: …" on a missing
-/// file, another header (several channels are not supported here), a row
-/// without exactly two cells, a cell that is not a finite decimal, or no rows.
-Records read_records_csv(const std::string& path);
 
 }  // namespace fdsid::reference

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include <string>
+#include <vector>
 
 namespace fdsid::reference {
 
@@ -65,5 +66,18 @@ void write_spectrum_csv(const Spectrum& spectrum, const std::string& path,
 /// distinctness of ω are checked by identify_frf. Throws InputError
 /// "<path>:<line>: …" on a malformed header, line or cell, or G_var ≤ 0.
 FrfData read_frf_csv(const std::string& path, const std::string& domain = "discrete");
+
+/// One SISO periodic input/output record (CONTRACTS.md "Periodic input/output
+/// records"), every sample parsed exactly from its decimal text.
+struct Records {
+  std::vector<Real> u, y;
+};
+
+/// Reads the records CSV: header `u,y`, then one row `u,y` per sample (blank
+/// lines skipped), each cell parsed exactly by parse_decimal (io.hpp), no
+/// binary double in between. Throws InputError "<path>:<line>: …" on a missing
+/// file, another header (several channels are not supported here), a row
+/// without exactly two cells, a cell that is not a finite decimal, or no rows.
+Records read_records_csv(const std::string& path);
 
 }  // namespace fdsid::reference
