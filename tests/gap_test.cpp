@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <cmath>
+#include <functional>
 #include <random>
 
 #include "fdsid/error.hpp"
@@ -56,6 +57,15 @@ RecordOptions options(std::uint64_t seed, double noise = 0.01) {
   o.output_noise_std = noise;
   o.seed = seed;
   return o;
+}
+
+// The record with y(t) replaced by f(u(t), y(t)) plus white noise of std 0.01
+// (sample by sample, in time order).
+Eigen::MatrixXd with_output(Eigen::MatrixXd rec, std::uint64_t seed, const std::function<double(double, double)>& f) {
+  std::mt19937_64 gen(seed);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  for (Eigen::Index i = 0; i < rec.rows(); ++i) rec(i, 1) = f(rec(i, 0), rec(i, 1)) + noise(gen);
+  return rec;
 }
 
 // The plant plus a parallel resonance at `f` cycles/sample, damping ratio 0.02.
@@ -158,13 +168,8 @@ TEST(GapDiagnosis, UnmodelledModeAndItsBand) {
 TEST(GapDiagnosis, CubicOutputNonlinearitySeenOnUnexcitedLines) {
   const StateSpace g = pintelon_plant();
   RecordMeta meta;
-  Eigen::MatrixXd rec = simulate_periodic_record(g, options(10, 0.0), meta);
-  std::mt19937_64 gen(10);
-  std::normal_distribution<double> noise(0.0, 0.01);
-  for (Eigen::Index i = 0; i < rec.rows(); ++i) {
-    const double y = rec(i, 1);
-    rec(i, 1) = y + 0.02 * y * y * y + noise(gen);
-  }
+  const Eigen::MatrixXd rec = with_output(simulate_periodic_record(g, options(10, 0.0), meta), 10,
+                                          [](double, double y) { return y + 0.02 * y * y * y; });
   const GapReport r = diagnose_gap(g, rec, 1, meta);
   SCOPED_TRACE(verdict(r));
   EXPECT_TRUE(has(r, "nonlinearity"));
@@ -175,19 +180,16 @@ TEST(GapDiagnosis, CubicOutputNonlinearitySeenOnUnexcitedLines) {
 
 TEST(GapDiagnosis, TransientFromRestIsLeakage) {
   // The plant driven from rest: the record's first period carries the transient
-  // (poles of modulus ≤ 0.995: after 512 samples ≤ 0.995^512 = 8e-2 of it remains,
-  // so periods 2–3 still carry some).
+  // (poles of modulus ≤ 0.954: 0.954^512 ≈ 4e-11 of it is left after one period).
   const StateSpace g = pintelon_plant();
   RecordMeta meta;
-  Eigen::MatrixXd rec = simulate_periodic_record(g, options(11, 0.0), meta);
-  std::mt19937_64 gen(11);
-  std::normal_distribution<double> noise(0.0, 0.01);
   Eigen::VectorXd x = Eigen::VectorXd::Zero(g.order());
-  for (Eigen::Index i = 0; i < rec.rows(); ++i) {
-    const double u = rec(i, 0);
-    rec(i, 1) = (g.C * x)(0) + g.D(0, 0) * u + noise(gen);
-    x = g.A * x + g.B.col(0) * u;
-  }
+  const Eigen::MatrixXd rec =
+      with_output(simulate_periodic_record(g, options(11, 0.0), meta), 11, [&](double u, double) {
+        const double y = (g.C * x)(0) + g.D(0, 0) * u;
+        x = g.A * x + g.B.col(0) * u;
+        return y;
+      });
   const GapReport r = diagnose_gap(g, rec, 1, meta);
   SCOPED_TRACE(verdict(r));
   EXPECT_EQ(r.present, std::vector<std::string>{"leakage"});
