@@ -549,9 +549,22 @@ class Diagnosis {
     std::vector<Eigen::VectorXcd> Phi;
     Eigen::VectorXd c;
     const double theta_max = model_.domain == Domain::Discrete ? M_PI : M_PI / s_.Ts * 1e3;
+    const double scale = model_.domain == Domain::Discrete ? 2 * M_PI : 2 * M_PI / s_.Ts;  // θ per cycle/sample
+    // A resonance the model lacks (grid = true) must be one the data can show:
+    // its peak inside the excited band, damping ratio at most 0.3 (a resonance,
+    // not a smooth correction that would stand in for a gain or a low-pass),
+    // and a half-power width 2ζθ of at least one line spacing 2π/P (ζ ≥ 1/(2k)
+    // at line k; narrower, it is a single-line outlier, not a mode).
+    const double th_lo = scale * s_.cycles(s_.exc.front()), th_hi = scale * s_.cycles(s_.exc.back());
     auto J = [&](const Eigen::Vector2d& v) {
       if (!(v(0) > 0 && v(0) < theta_max) || v(1) > std::log(v(0)) || v(1) < -30)
         return std::numeric_limits<double>::infinity();
+      if (grid) {
+        const double zeta = std::exp(v(1)) / std::hypot(v(0), std::exp(v(1)));
+        const double k = v(0) / scale * s_.P;
+        if (!(v(0) >= th_lo && v(0) <= th_hi && zeta <= 0.3 && zeta >= std::max(1e-3, 0.5 / k)))
+          return std::numeric_limits<double>::infinity();
+      }
       mode_terms(mode_pole(model_.domain, v(0), std::exp(v(1))), X, with_d, Phi);
       return weighted_ls(Phi, R, W.w, c);
     };
@@ -562,7 +575,6 @@ class Diagnosis {
       if (th > 0 && sg > 0) x0.emplace_back(th, std::log(sg));
     }
     if (grid) {  // resonances at the excited frequencies, damping ratios 0.003 … 0.3
-      const double scale = model_.domain == Domain::Discrete ? 2 * M_PI : 2 * M_PI / s_.Ts;
       const int step = std::max<int>(1, static_cast<int>(s_.exc.size()) / 300);
       Eigen::Vector2d gbest(0, 0);
       double jbest = std::numeric_limits<double>::infinity();
