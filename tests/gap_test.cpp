@@ -215,6 +215,14 @@ TEST(GapDiagnosis, RefusesWhatItCannotUse) {
   mimo.C = Eigen::MatrixXd::Ones(2, g.order());
   mimo.D = Eigen::MatrixXd::Zero(2, 1);
   EXPECT_THROW(diagnose_gap(mimo, rec, 1, meta), Error);
+  // a pole on the unit circle at excited line 1: e^{±j2π/P}
+  StateSpace osc;
+  osc.A.resize(2, 2);
+  osc.A << std::cos(2 * M_PI / kP), std::sin(2 * M_PI / kP), -std::sin(2 * M_PI / kP), std::cos(2 * M_PI / kP);
+  osc.B = Eigen::MatrixXd::Ones(2, 1);
+  osc.C = Eigen::MatrixXd::Ones(1, 2);
+  osc.D = Eigen::MatrixXd::Zero(1, 1);
+  EXPECT_THROW(diagnose_gap(osc, rec, 1, meta), Error);
   GapOptions o;
   o.alpha = 0;
   EXPECT_THROW(diagnose_gap(g, rec, 1, meta, o), Error);

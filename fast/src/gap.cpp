@@ -341,7 +341,12 @@ class Diagnosis {
     a.base.resize(L);
     for (Eigen::Index k = 0; k < L; ++k) {
       const cplx g = transfer(model_, s_.xi(k))(0, 0);
-      a.base(k) = std::isfinite(g.real()) && std::isfinite(g.imag()) ? g : cplx(0);  // an integrator at DC
+      const bool finite = std::isfinite(g.real()) && std::isfinite(g.imag()) && std::abs(g) < 1e150;
+      if (!finite && k > 0)
+        throw Error(ErrorKind::Input, "model",
+                    "has a pole on the frequency axis at DFT line " + std::to_string(k) + " (" +
+                        std::to_string(s_.hz(k)) + " Hz): its steady-state response to the record is undefined");
+      a.base(k) = finite ? g : cplx(0);  // an integrator at DC: DC is used by no test
     }
     return a;
   }
