@@ -130,6 +130,12 @@ TEST(GapDiagnosis, GainError) {
   const GapReport r = diagnose_gap(g, rec, 1, meta);
   SCOPED_TRACE(verdict(r));
   EXPECT_EQ(r.present, std::vector<std::string>{"gain_error"});
+  // The stages the figure draws: the model as given, then the gain added.
+  ASSERT_EQ(r.steps.size(), 2u);
+  EXPECT_EQ(r.steps[0].first, "model");
+  EXPECT_EQ(r.steps[1].first, "+ gain_error");
+  EXPECT_EQ(r.steps[0].second, r.t_before);
+  EXPECT_EQ(r.steps[1].second, r.t_after);
   // Noise 0.01 against |Y| ≈ 0.1 … 5 on 38 lines, 8 periods: the weighted LS
   // gain has relative sd below 1e-3; 0.01 is ≥ 10 sd.
   EXPECT_NEAR(param(r, "gain_error", "gain"), 1.2, 0.01);

@@ -1008,9 +1008,15 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
   // linear effects: the best single (BIC) if its F-test and relevance rule
   // pass, then the best pair (joint fit) if it beats that single likewise.
   Augment cur = a0;
+  rep.steps.emplace_back("model", st0.t);
+  // Stage labels accumulate: "+ leakage", "+ leakage + nonlinearity", ...
+  auto add_step = [&](const std::string& base, const std::string& what, const Augment& a) {
+    rep.steps.emplace_back(base == "model" ? "+ " + what : base + " + " + what, line_stats(s, a, s.exc).t);
+  };
   if (drop > 0) {
     cur.first = drop;
     rep.chosen.push_back({"leakage", 0, 0, 0, rep.p_leakage, {{"transient_periods", static_cast<double>(drop)}}});
+    add_step(rep.steps.back().first, "leakage", cur);
   }
   bool nonlinear = false;
   if (s.ne.size() >= 4) {
@@ -1021,6 +1027,7 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
       t.fit.p_value = p;
       cur = t.state;
       rep.chosen.push_back(t.fit);
+      add_step(rep.steps.back().first, "nonlinearity", cur);
     }
   }
   {
@@ -1094,6 +1101,13 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
     if (!accepted.empty()) {
       cur = accepted.back().state;
       for (const EffectFit& f : accepted.back().fits) rep.chosen.push_back(f);
+      // The single, then the pair that replaced it (both from the same base).
+      const std::string base = rep.steps.back().first;
+      for (const Choice& c : accepted) {
+        std::string what;
+        for (const std::string& e : c.set) what += (what.empty() ? "" : " + ") + e;
+        add_step(base, what, c.state);
+      }
     }
   }
   rep.periods_used = s.M - cur.first;

@@ -12,6 +12,7 @@
 #include "fdsid/error.hpp"
 #include "fdsid/gap_cases.hpp"
 #include "fdsid/io.hpp"
+#include "progress.hpp"
 
 namespace fdsid {
 namespace {
@@ -110,8 +111,9 @@ GapValidation validate_gap(const GapValidationOptions& o) {
   GapValidation v;
   v.cases = o.cases;
   v.rows.resize(o.cases);
-  std::atomic<int> next{0}, done{0};
+  std::atomic<int> next{0};
   std::mutex mu;
+  ProgressCounter progress(o.progress, o.cases);
   std::string failure;
   auto worker = [&] {
     for (int i; (i = next++) < o.cases;) {
@@ -121,11 +123,7 @@ GapValidation validate_gap(const GapValidationOptions& o) {
         std::lock_guard<std::mutex> lock(mu);
         if (failure.empty()) failure = "case " + std::to_string(i) + ": " + e.what();
       }
-      const int d = ++done;
-      if (o.progress) {
-        std::lock_guard<std::mutex> lock(mu);
-        o.progress(d, o.cases);
-      }
+      progress.add();
     }
   };
   const int threads = std::max(1, std::min(o.cases, o.threads > 0 ? o.threads

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
 
 #include "fdsid/error.hpp"
 
@@ -41,6 +44,29 @@ Eigen::VectorXcd poles(const StateSpace& m) {
   if (m.A.rows() == 0) return {};
   Eigen::VectorXcd ev = m.A.eigenvalues();
   std::vector<cplx> v(ev.data(), ev.data() + ev.size());
+  std::sort(v.begin(), v.end(), [](cplx a, cplx b) {
+    if (std::abs(a) != std::abs(b)) return std::abs(a) < std::abs(b);
+    return std::arg(a) < std::arg(b);
+  });
+  return Eigen::Map<Eigen::VectorXcd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
+Eigen::VectorXcd zeros(const StateSpace& m) {
+  const Eigen::Index n = m.A.rows(), k = m.B.cols();
+  if (n == 0 || k != m.C.rows()) return {};
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(n + k, n + k), Q = Eigen::MatrixXd::Zero(n + k, n + k);
+  P << m.A, m.B, m.C, m.D;
+  Q.topLeftCorner(n, n).setIdentity();
+  Eigen::GeneralizedEigenSolver<Eigen::MatrixXd> qz(P, Q);
+  if (qz.info() != Eigen::Success) throw Error(ErrorKind::Numerical, "zeros", "QZ of the Rosenbrock pencil did not converge");
+  const double scale = std::max(1.0, P.norm());
+  std::vector<cplx> v;
+  for (Eigen::Index i = 0; i < n + k; ++i) {
+    const cplx a = qz.alphas()(i);
+    const double b = qz.betas()(i);
+    if (b != 0 && std::abs(a / b) < 1e10 * scale)
+      v.push_back(a / b);
+  }
   std::sort(v.begin(), v.end(), [](cplx a, cplx b) {
     if (std::abs(a) != std::abs(b)) return std::abs(a) < std::abs(b);
     return std::arg(a) < std::arg(b);

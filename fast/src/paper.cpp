@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "fdsid/error.hpp"
+#include "progress.hpp"
 
 namespace fdsid {
 
@@ -114,6 +115,7 @@ std::vector<Table2Row> reproduce_table2(const Table2Options& o) {
   if (o.realizations < 1) throw Error(ErrorKind::Input, "--realizations", "must be at least 1");
   const StateSpace sys = akcay_example_system();
   std::vector<Table2Row> rows;
+  ProgressCounter progress(o.progress, o.realizations * static_cast<int>(o.Ms.size()));
   for (int M : o.Ms) {
     const Eigen::MatrixXcd clean = sample_spectrum(sys, M);
     std::vector<double> l2(o.realizations, NAN), linf(o.realizations, NAN);
@@ -145,6 +147,7 @@ std::vector<Table2Row> reproduce_table2(const Table2Options& o) {
             vo_failed[i] = e.kind() == ErrorKind::Split ? 1 : 2;
           }
         }
+        progress.add();
       }
     };
     const int threads = std::max(1, o.threads > 0 ? o.threads : static_cast<int>(std::thread::hardware_concurrency()));
@@ -252,6 +255,7 @@ FigureResult reproduce_pintelon_figure(const FigureOptions& o) {
   const int blocks = (o.runs + kBlock - 1) / kBlock;
   std::vector<FigureSums> sums(blocks, FigureSums(F));
   std::atomic<int> next{0};
+  ProgressCounter progress(o.progress, o.runs);
   auto worker = [&]() {
     std::vector<std::vector<Eigen::VectorXcd>> U_l(o.M, std::vector<Eigen::VectorXcd>(F, Eigen::VectorXcd(1)));
     std::vector<std::vector<Eigen::VectorXcd>> Y_l = U_l;
@@ -298,6 +302,7 @@ FigureResult reproduce_pintelon_figure(const FigureOptions& o) {
           ++acc.failures;
         }
       }
+      progress.add(std::min(o.runs, (b + 1) * kBlock) - b * kBlock);
     }
   };
   const int threads = std::max(1, o.threads > 0 ? o.threads : static_cast<int>(std::thread::hardware_concurrency()));

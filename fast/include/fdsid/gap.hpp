@@ -78,6 +78,11 @@ struct GapReport {
   /// as given and with every present effect added, and the per-line flag.
   Eigen::VectorXd frequency, t_before, t_after;
   std::vector<bool> flagged;
+  /// t(k) on the excited lines after each stage of the augmentation, in the
+  /// order the stages were added: {"model", t_before}, then e.g.
+  /// {"+ leakage", …}, {"+ leakage + nonlinearity", …}, {"… + gain_error", …}.
+  /// The last equals t_after. For the figure of `fdsid gap --plot`.
+  std::vector<std::pair<std::string, Eigen::VectorXd>> steps;
   std::vector<std::string> notes;
 };
 

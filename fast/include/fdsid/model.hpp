@@ -40,6 +40,14 @@ Eigen::MatrixXcd power_spectrum(const StateSpace& model, cplx z);
 /// Eigenvalues of A (the poles), sorted by modulus then argument.
 Eigen::VectorXcd poles(const StateSpace& model);
 
+/// Transmission zeros of a square model: the finite generalised eigenvalues of
+/// the Rosenbrock pencil ([A B; C D], [I 0; 0 0]) by real QZ (Eigen's
+/// GeneralizedEigenSolver); infinite ones are dropped (an infinite eigenvalue
+/// comes back with β ≈ u‖pencil‖, so |α/β| ≥ 1e10 max(1, ‖pencil‖_F) is read
+/// as infinite). Sorted like poles(). Empty for a non-square
+/// model or order 0.
+Eigen::VectorXcd zeros(const StateSpace& model);
+
 /// Solution P of the discrete Lyapunov equation P = A P A^T + Q for stable A.
 /// Method: Smith's doubling, P <- P + A_k P A_k^T, A_k <- A_k^2, until A_k
 /// is negligible; O(n^3 log(log u / log rho(A))). Throws Error(Numerical)

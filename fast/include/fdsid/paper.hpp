@@ -3,6 +3,7 @@
 /// Tables 1 and 2. These drive `fdsid reproduce table1|table2`; the numbers
 /// come out of the algorithms in spectrum_id.hpp, nothing is tabulated here.
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "fdsid/frf_id.hpp"
@@ -50,6 +51,9 @@ struct Table2Options {
   Extension extension = Extension::Conjugate;
   NoiseVariance noise = NoiseVariance::UnitComplex;
   int threads = 0;  ///< 0: std::thread::hardware_concurrency()
+  /// Called after each realisation (done, total over all M), from the worker
+  /// threads, serialised; empty: no progress.
+  std::function<void(int done, int total)> progress;
 };
 
 struct Table2Row {
@@ -101,6 +105,9 @@ struct FigureOptions {
   /// (a unit sine under the DFT scaling of Eq. 4) is the other natural choice.
   double input_level = 1.0;
   int threads = 0;          ///< 0: std::thread::hardware_concurrency()
+  /// Called after each block of runs (runs done, runs), from the worker
+  /// threads, serialised; empty: no progress.
+  std::function<void(int done, int total)> progress;
 };
 
 struct FigureResult {
