@@ -9,4 +9,5 @@ $SUDO apt-get install -y -qq --no-install-recommends \
   build-essential cmake pkg-config git \
   libeigen3-dev libfftw3-dev nlohmann-json3-dev libcli11-dev \
   libgtest-dev libbenchmark-dev librapidcheck-dev libboost-dev gcovr \
+  libplplot-dev plplot-driver-cairo \
   clang libclang-rt-14-dev >/dev/null

@@ -1,0 +1,246 @@
+// Figures of --plot (plot/): what each builder puts on its panels, and that
+// render() writes a complete SVG or PNG with the labels, or refuses cleanly.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <regex>
+#include <sstream>
+
+#include "fdsid/error.hpp"
+#include "fdsid/figures.hpp"
+#include "fdsid/model.hpp"
+#include "fdsid/paper.hpp"
+#include "fdsid/plot.hpp"
+#include "fdsid/gap.hpp"
+#include "fdsid/simulate.hpp"
+
+namespace fs = std::filesystem;
+using fdsid::plot::Figure;
+using fdsid::plot::Panel;
+using fdsid::plot::Series;
+
+namespace {
+
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    std::random_device rd;
+    path = fs::temp_directory_path() / ("fdsid_plot_test_" + std::to_string(rd()));
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The text of an SVG written by PLplot's svg driver: its characters are
+// numeric entities (&#x4d; ...) inside <tspan> elements; decoded to ASCII.
+std::string svg_text(const std::string& svg) {
+  std::string out;
+  const std::regex entity("&#x([0-9a-fA-F]+);");
+  for (std::sregex_iterator it(svg.begin(), svg.end(), entity), end; it != end; ++it) {
+    const unsigned long c = std::stoul((*it)[1].str(), nullptr, 16);
+    out += c < 128 ? static_cast<char>(c) : '?';
+  }
+  return out;
+}
+
+const Series* find_series(const Panel& p, const std::string& label) {
+  for (const Series& s : p.series)
+    if (s.label == label) return &s;
+  return nullptr;
+}
+
+double decades(const std::vector<double>& v) {
+  double lo = INFINITY, hi = 0;
+  for (double x : v)
+    if (x > 0) {
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+    }
+  return std::log10(hi / lo);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// transmission zeros (fast/ model.hpp), which the pole-zero panels draw
+
+TEST(Zeros, FirstOrderWithFeedthrough) {
+  // G(z) = 1 + 0.4/(z - 0.9) = (z - 0.5)/(z - 0.9): one zero at 0.5. The pencil
+  // is 2x2 with entries O(1); QZ is backward stable, so the zero is exact to a
+  // few units of roundoff: tolerance 100 u.
+  fdsid::StateSpace m;
+  m.A = Eigen::MatrixXd::Constant(1, 1, 0.9);
+  m.B = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  m.C = Eigen::MatrixXd::Constant(1, 1, 0.4);
+  m.D = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  const Eigen::VectorXcd z = fdsid::zeros(m);
+  ASSERT_EQ(z.size(), 1);
+  EXPECT_NEAR(z(0).real(), 0.5, 100 * 1.1e-16);
+  EXPECT_NEAR(z(0).imag(), 0.0, 100 * 1.1e-16);
+}
+
+TEST(Zeros, StrictlyProperDropsInfiniteZeros) {
+  // G(z) = (z - 0.3) / ((z - 0.5)(z + 0.2)) in controllable form, D = 0:
+  // one finite zero at 0.3, the other pencil eigenvalues are infinite.
+  // A = [0.7 -(-0.1)...]: z^2 - 0.3 z - 0.1 → A = [[0.3, 0.1], [1, 0]], B = e1,
+  // C = [1, -0.3]. Tolerance as above (entries O(1)).
+  fdsid::StateSpace m;
+  m.A.resize(2, 2);
+  m.A << 0.3, 0.1, 1.0, 0.0;
+  m.B = Eigen::MatrixXd::Zero(2, 1);
+  m.B(0, 0) = 1;
+  m.C.resize(1, 2);
+  m.C << 1.0, -0.3;
+  m.D = Eigen::MatrixXd::Zero(1, 1);
+  const Eigen::VectorXcd z = fdsid::zeros(m);
+  ASSERT_EQ(z.size(), 1);
+  EXPECT_NEAR(std::abs(z(0) - std::complex<double>(0.3, 0)), 0.0, 100 * 1.1e-16);
+  // Non-square models have no transmission zeros here.
+  m.C = Eigen::MatrixXd::Zero(2, 2);
+  m.D = Eigen::MatrixXd::Zero(2, 1);
+  EXPECT_EQ(fdsid::zeros(m).size(), 0);
+}
+
+// ---------------------------------------------------------------------------
+// What the builders put on the panels
+
+TEST(Figures, Table1ShowsTheCollapseOfSigma5BesideTheRankOfY) {
+  const auto rows = fdsid::reproduce_table1();
+  const Figure f = fdsid::plot::table1_figure(rows);
+  ASSERT_EQ(f.panels.size(), 2u);
+  const Panel &vo = f.panels[0], &ak = f.panels[1];
+  EXPECT_TRUE(vo.x.log && vo.y.log && ak.x.log && ak.y.log);
+  const Series* s5 = find_series(vo, "#gs#d5#u");
+  const Series* y8 = find_series(ak, "#gs#d8#u");
+  ASSERT_NE(s5, nullptr);
+  ASSERT_NE(y8, nullptr);
+  ASSERT_EQ(s5->y.size(), rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) EXPECT_EQ(s5->y[i], rows[i].vo_sigmas(4));
+  // Akçay (2011) Table 1: σ5 falls from 2.4e-3 (M = 16) to ~1e-16 (M = 512),
+  // more than 10 decades; σ8 of 𝒴 (2n = 8) stays within one decade.
+  EXPECT_GT(decades(s5->y), 10.0);
+  EXPECT_LT(decades(y8->y), 1.0);
+}
+
+TEST(Figures, GapFigureCarriesEveryStageAndTheBands) {
+  // The plant of Pintelon (2002) Eq. (36) measured with a 20 % gain error.
+  const fdsid::StateSpace g = fdsid::pintelon_plant();
+  fdsid::StateSpace truth = g;
+  truth.B *= 1.2;
+  truth.D *= 1.2;
+  fdsid::RecordOptions o;
+  o.period = 512;
+  o.periods = 8;
+  o.output_noise_std = 0.01;
+  o.seed = 7;
+  fdsid::RecordMeta meta;
+  const Eigen::MatrixXd rec = fdsid::simulate_periodic_record(truth, o, meta);
+  const fdsid::GapReport r = fdsid::diagnose_gap(g, rec, 1, meta);
+  const Figure f = fdsid::plot::gap_figure(r, 8);
+  ASSERT_EQ(f.panels.size(), 2u);
+  const Panel& t = f.panels[0];
+  EXPECT_TRUE(t.y.log);
+  ASSERT_GE(r.steps.size(), 2u);  // the model and at least the gain correction
+  EXPECT_EQ(r.steps.front().first, "model");
+  EXPECT_EQ(r.steps.back().second, r.t_after);
+  for (size_t i = 0; i < r.steps.size(); ++i) EXPECT_EQ(t.series[i].y.size(), static_cast<size_t>(r.frequency.size()));
+  EXPECT_EQ(t.bands.size(), r.bands.size());
+  // Every candidate effect is named on the second panel's axis, best first.
+  ASSERT_EQ(f.panels[1].x.categories.size(), r.candidates.size());
+  for (size_t i = 0; i < r.candidates.size(); ++i) EXPECT_EQ(f.panels[1].x.categories[i], r.candidates[i].effect);
+}
+
+// ---------------------------------------------------------------------------
+// Rendering
+
+TEST(Render, SvgHasTheLabelsAndLegend) {
+  TempDir d;
+  Figure f;
+  Panel p;
+  p.title = "Title here";
+  p.x = fdsid::plot::axis("frequency (Hz)", false);
+  p.y = fdsid::plot::axis("magnitude", true);
+  Series s;
+  s.label = "measured";
+  s.x = {1, 2, 3, 4};
+  s.y = {1e-3, 1e-1, 1e1, 1e3};
+  p.series = {s};
+  p.bands = {{1.5, 2.5}};
+  p.band_label = "flagged";
+  f.panels = {p};
+  const fs::path out = d.path / "a.svg";
+  fdsid::plot::render(f, out.string());
+  const std::string svg = slurp(out);
+  ASSERT_NE(svg.find("<svg"), std::string::npos);
+  const std::string text = svg_text(svg);
+  for (const char* needle : {"frequency (Hz)", "magnitude", "Title here", "measured", "flagged"})
+    EXPECT_NE(text.find(needle), std::string::npos) << needle;
+  // No temporary file is left beside it.
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(d.path)) files += e.is_regular_file();
+  EXPECT_EQ(files, 1);
+}
+
+TEST(Render, PngIsAPngImage) {
+  TempDir d;
+  const Figure f = fdsid::plot::table1_figure(fdsid::reproduce_table1({16, 32, 64}));
+  const fs::path out = d.path / "t1.PNG";  // extension case does not matter
+  fdsid::plot::render(f, out.string());
+  const std::string png = slurp(out);
+  ASSERT_GT(png.size(), 1000u);
+  EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+}
+
+TEST(Render, RefusesOtherExtensionsAndMissingDirectories) {
+  TempDir d;
+  Figure f;
+  f.panels.resize(1);
+  auto refuses = [&](const std::string& path, const std::string& why) {
+    try {
+      fdsid::plot::render(f, path);
+      ADD_FAILURE() << path << " was accepted";
+    } catch (const fdsid::Error& e) {
+      EXPECT_EQ(e.kind(), fdsid::ErrorKind::Input);
+      EXPECT_EQ(e.where(), "--plot");
+      EXPECT_NE(e.message().find(why), std::string::npos) << e.what();
+    }
+  };
+  refuses((d.path / "a.pdf").string(), ".svg or .png");
+  refuses((d.path / "a").string(), ".svg or .png");
+  refuses((d.path / "no" / "such" / "a.svg").string(), "does not exist");
+  fs::create_directories(d.path / "dir.svg");
+  refuses((d.path / "dir.svg").string(), "is a directory");
+  f.panels.clear();
+  refuses((d.path / "empty.svg").string(), "no panels");
+}
+
+TEST(Render, NonFiniteAndNonPositiveValuesAreSkippedNotDrawn) {
+  // A log axis cannot show 0 or a negative value, nor any axis NaN/Inf: such
+  // points break the line instead of failing the figure.
+  TempDir d;
+  Figure f;
+  Panel p;
+  p.x = fdsid::plot::axis("x", false);
+  p.y = fdsid::plot::axis("y", true);
+  Series s;
+  s.label = "with gaps";
+  s.x = {0, 1, 2, 3, 4, 5};
+  s.y = {1, 0, -1, NAN, INFINITY, 10};
+  p.series = {s};
+  f.panels = {p};
+  EXPECT_NO_THROW(fdsid::plot::render(f, (d.path / "gaps.svg").string()));
+  EXPECT_TRUE(fs::exists(d.path / "gaps.svg"));
+}
