@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <filesystem>
 #include <initializer_list>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include <unistd.h>
 
 #include "fdsid/error.hpp"
+#include "fdsid/figures.hpp"
 #include "fdsid/frf_id.hpp"
 #include "fdsid/gap.hpp"
 #include "fdsid/gap_validate.hpp"
@@ -37,6 +39,22 @@ std::string sci(double x, int digits = 3) {
 
 void emit_json(const std::string& path, const json& j) {
   if (!path.empty()) fdsid::write_text_file(path, j.dump(2) + "\n");
+}
+
+// --plot FILE: draws the figure when a path was given.
+void emit_plot(const std::string& path, const fdsid::plot::Figure& fig) {
+  if (!path.empty()) fdsid::plot::render(fig, path);
+}
+
+// Progress of a long run on stderr, only when stderr is a terminal (quiet in
+// pipes, logs and tests).
+std::function<void(int, int)> terminal_progress(const std::string& what) {
+  if (!isatty(fileno(stderr))) return {};
+  return [what](int done, int total) {
+    std::fprintf(stderr, "\r%s: %d/%d", what.c_str(), done, total);
+    if (done == total) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  };
 }
 
 // Prints the human summary unless the JSON goes to stdout.
@@ -82,7 +100,7 @@ int parse_order(const std::string& s) {
   return static_cast<int>(v);
 }
 
-int run_table1(const std::string& json_path) {
+int run_table1(const std::string& json_path, const std::string& plot_path) {
   Out out{json_path == "-"};
   const auto rows = fdsid::reproduce_table1();
   json j;
@@ -105,11 +123,13 @@ int run_table1(const std::string& json_path) {
   }
   out << "sigma5 of Van Overschee's matrix collapses geometrically with M; the 2n = 8 singular values of Y do not.\n";
   emit_json(json_path, j);
+  emit_plot(plot_path, fdsid::plot::table1_figure(rows));
   return 0;
 }
 
-int run_table2(const std::string& json_path, const fdsid::Table2Options& o) {
+int run_table2(const std::string& json_path, const std::string& plot_path, fdsid::Table2Options o) {
   Out out{json_path == "-"};
+  o.progress = terminal_progress("table2: realisations");
   const auto rows = fdsid::reproduce_table2(o);
   json j;
   j["source"] = "Akcay (2011) Table 2: mean measured L2 / Linf errors of Algorithm 1, p = r = 50, eps = 1e-3";
@@ -142,12 +162,13 @@ int run_table2(const std::string& json_path, const fdsid::Table2Options& o) {
     out << line;
   }
   emit_json(json_path, j);
+  emit_plot(plot_path, fdsid::plot::table2_figure(rows, o));
   return 0;
 }
 
-int run_identify_spectrum(const std::string& json_path, const std::string& data_path, const std::string& order,
-                          int p, int r, const std::string& method, const std::string& precision,
-                          const std::string& extension) {
+int run_identify_spectrum(const std::string& json_path, const std::string& plot_path, const std::string& data_path,
+                          const std::string& order, int p, int r, const std::string& method,
+                          const std::string& precision, const std::string& extension) {
   Out out{json_path == "-"};
   if (precision != "double" && precision != "high")
     throw fdsid::Error(fdsid::ErrorKind::Input, "--precision", "\"" + precision + "\" is not double or high");
@@ -160,6 +181,8 @@ int run_identify_spectrum(const std::string& json_path, const std::string& data_
   so.p = p;
   so.r = r;
   so.extension = parse_extension(extension);
+  if (precision == "high" && !plot_path.empty())
+    throw fdsid::Error(fdsid::ErrorKind::Input, "--plot", "is drawn from the double-precision result; not with --precision high");
   if (precision == "high")
     return fdsid::cli::identify_spectrum_high(json_path, data_path, so.order, p, r,
                                               so.method == fdsid::Method::VanOverschee1997, so.extension);
@@ -182,6 +205,7 @@ int run_identify_spectrum(const std::string& json_path, const std::string& data_
       << sci(res.riccati_residual, 1) << "\n";
   for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
   emit_json(json_path, j);
+  emit_plot(plot_path, fdsid::plot::spectrum_figure(data, res));
   return 0;
 }
 
@@ -217,7 +241,7 @@ int run_sample_spectrum(const std::string& model_path, int M, double epsilon, st
 }
 
 struct FrfCommand {
-  std::string frf_path, data_path, meta_path;
+  std::string frf_path, data_path, meta_path, plot_path;
   std::string order = "auto", domain = "discrete", method = "bilinear", precision = "double";
   std::string eiv_variance = "data";
   int r = 0, r_max = 0;
@@ -296,6 +320,8 @@ int run_identify_frf(const std::string& json_path, const FrfCommand& c) {
     }
   }
   if (c.precision == "high") {
+    if (!c.plot_path.empty())
+      throw fdsid::Error(fdsid::ErrorKind::Input, "--plot", "is drawn from the double-precision result; not with --precision high");
     if (c.eiv || c.improper)
       throw fdsid::Error(fdsid::ErrorKind::Input, "--precision", "high is not available with --eiv or --improper");
     fdsid::cli::FrfHighRequest q;
@@ -366,6 +392,7 @@ int run_identify_frf(const std::string& json_path, const FrfCommand& c) {
   if (c.improper) out << "the model is the inverse system 1/G (improper G, Pintelon 2002 Section 5)\n";
   for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
   emit_json(json_path, j);
+  emit_plot(c.plot_path, fdsid::plot::frf_figure(data, res));
   return 0;
 }
 
@@ -380,9 +407,10 @@ int run_simulate_records(const std::string& model_path, fdsid::RecordOptions o, 
   return 0;
 }
 
-int run_figure(const std::string& json_path, int figure, fdsid::FigureOptions o) {
+int run_figure(const std::string& json_path, const std::string& plot_path, int figure, fdsid::FigureOptions o) {
   Out out{json_path == "-"};
   if (o.order == 0) o.order = figure == 1 ? 4 : 1;
+  o.progress = terminal_progress(std::string("fig") + std::to_string(figure) + ": runs");
   const fdsid::FigureResult res = fdsid::reproduce_pintelon_figure(o);
   const int F = static_cast<int>(res.frequency.size());
   auto vec = [](const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); };
@@ -416,6 +444,7 @@ int run_figure(const std::string& json_path, int figure, fdsid::FigureOptions o)
   // has relative sd ≈ 1/sqrt(2 N_r); their ratio at most sqrt(2) times that.
   out << "Monte Carlo standard error of one ratio <= " << std::sqrt(2.0) / std::sqrt(2.0 * res.runs) << "\n";
   emit_json(json_path, j);
+  emit_plot(plot_path, fdsid::plot::std_ratio_figure(res, figure, o));
   return 0;
 }
 
@@ -438,8 +467,9 @@ void write_gap_table(const std::string& path, const fdsid::GapReport& r) {
   fdsid::write_text_file(path, csv.str());
 }
 
-int run_gap(const std::string& json_path, const std::string& model_path, const std::string& data_path,
-            const std::string& meta_path, const std::string& table_path, const fdsid::GapOptions& o) {
+int run_gap(const std::string& json_path, const std::string& plot_path, const std::string& model_path,
+            const std::string& data_path, const std::string& meta_path, const std::string& table_path,
+            const fdsid::GapOptions& o) {
   Out out{json_path == "-"};
   const fdsid::StateSpace model = fdsid::read_model(model_path);
   int inputs = 0;
@@ -476,16 +506,13 @@ int run_gap(const std::string& json_path, const std::string& model_path, const s
   for (const std::string& n : r.notes) out << "note: " << n << "\n";
   if (!table_path.empty()) write_gap_table(table_path, r);
   emit_json(json_path, fdsid::gap_report_to_json(r));
+  emit_plot(plot_path, fdsid::plot::gap_figure(r, meta.periods));
   return 0;
 }
 
 int run_gap_validate(const std::string& json_path, fdsid::GapValidationOptions o) {
   Out out{json_path == "-"};
-  if (isatty(fileno(stderr)))  // progress on a terminal only
-    o.progress = [](int done, int total) {
-      std::fprintf(stderr, "\rgap-validate: %d/%d cases", done, total);
-      if (done == total) std::fprintf(stderr, "\n");
-    };
+  o.progress = terminal_progress("gap-validate: cases");
   const fdsid::GapValidation v = fdsid::validate_gap(o);
   const json j = fdsid::gap_validation_to_json(v);
   out << "gap-validate: " << v.cases << " blind cases (P = " << o.period << ", M = " << o.periods
@@ -511,16 +538,19 @@ int run_gap_validate(const std::string& json_path, fdsid::GapValidationOptions o
 int main(int argc, char** argv) {
   CLI::App app{"fdsid: frequency-domain subspace identification (Akcay 2011, Pintelon 2002)"};
   app.require_subcommand(1);
-  std::string json_path;
+  std::string json_path, plot_path;
+  const char* plot_help = "draw the figure into this file (.svg or .png)";
 
   auto* reproduce = app.add_subcommand("reproduce", "reproduce a table or figure of the papers");
   reproduce->require_subcommand(1);
   auto* t1 = reproduce->add_subcommand("table1", "Akcay (2011) Table 1");
   t1->add_option("--json", json_path, "write the JSON result here (- = stdout)");
+  t1->add_option("--plot", plot_path, plot_help);
   auto* t2 = reproduce->add_subcommand("table2", "Akcay (2011) Table 2 (Monte Carlo)");
   fdsid::Table2Options t2o;
   std::string t2_ext = "conjugate", t2_noise = "unit-complex";
   t2->add_option("--json", json_path, "write the JSON result here (- = stdout)");
+  t2->add_option("--plot", plot_path, plot_help);
   t2->add_option("--realizations", t2o.realizations, "noise realisations (paper: 100)")->check(CLI::Range(1, 1000000));
   t2->add_option("--seed", t2o.seed, "random seed");
   t2->add_option("--threads", t2o.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
@@ -536,6 +566,7 @@ int main(int argc, char** argv) {
                                         f == 0 ? "Pintelon (2002) Fig. 1: sample-subspace std ratio, no model errors"
                                                : "Pintelon (2002) Fig. 2: std ratio with model errors (n_a = 1)");
     figs[f]->add_option("--json", json_path, "write the JSON result here (- = stdout)");
+    figs[f]->add_option("--plot", plot_path, plot_help);
     figs[f]->add_option("--runs", figo.runs, "Monte Carlo runs N_r (paper: 10000)")->check(CLI::Range(2, 10000000));
     figs[f]->add_option("--seed", figo.seed, "random seed");
     figs[f]->add_option("--threads", figo.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
@@ -553,6 +584,7 @@ int main(int argc, char** argv) {
   idf->add_option("--data", frf.data_path, "periodic input/output records CSV: u,y (or u1,...,y1,...)");
   idf->add_option("--meta", frf.meta_path, "meta JSON of the records: period, periods, sample_time, excited_lines");
   idf->add_option("--json", json_path, "write the identified model here (- = stdout)");
+  idf->add_option("--plot", frf.plot_path, plot_help);
   idf->add_option("--order", frf.order, "model order n_a, or auto (from the singular values of step 1c)");
   idf->add_option("--r", frf.r, "r > n_a (default: minimise V_SUB, Eq. 35, over [1.5 n_a, 6 n_a])");
   idf->add_option("--r-max", frf.r_max, "upper end of the r search (default 6 n_a)");
@@ -585,6 +617,7 @@ int main(int argc, char** argv) {
   int p = 0, r = 0;
   ids->add_option("--data", data_path, "power-spectrum CSV")->required();
   ids->add_option("--json", json_path, "write the identified model here (- = stdout)");
+  ids->add_option("--plot", plot_path, plot_help);
   ids->add_option("--order", order, "model order n, or auto");
   ids->add_option("--p", p, "block rows of Y (default: min(50, M), at least 2n+1)");
   ids->add_option("--r", r, "block columns of Y (default: min(50, N - p), at least 2n)");
@@ -619,6 +652,7 @@ int main(int argc, char** argv) {
   gap->add_option("--data", gap_data, "periodic records CSV (u,y), M whole periods")->required();
   gap->add_option("--meta", gap_meta, "meta JSON: period, periods, sample_time, excited_lines")->required();
   gap->add_option("--json", json_path, "write the report here (- = stdout)");
+  gap->add_option("--plot", plot_path, plot_help);
   gap->add_option("--table", gap_table, "write the plot-ready table (frequency, t before/after, flag) here");
   gap->add_option("--alpha", gapo.alpha, "level of each detection test (default 0.01)");
   gap->add_option("--effect-alpha", gapo.effect_alpha, "level of the F-test admitting an effect (default 1e-3)");
@@ -667,6 +701,12 @@ int main(int argc, char** argv) {
     for (const CLI::App* sub : {t1, t2, ids, chk, idf, figs[0], figs[1], gap, gval})
       if (sub->parsed() && sub->count("--json") > 0 && json_path.empty())
         throw fdsid::Error(fdsid::ErrorKind::Input, "--json", "empty path (use - for stdout)");
+    if (idf->parsed()) plot_path = frf.plot_path;
+    for (const CLI::App* sub : {t1, t2, ids, idf, figs[0], figs[1], gap})
+      if (sub->parsed() && sub->count("--plot") > 0) {
+        fdsid::plot::check_plot_path(plot_path);
+        refuse_overwrite(plot_path, {data_path, model_path, frf.frf_path, frf.data_path, frf.meta_path, gap_data, gap_meta, json_path}, "--plot");
+      }
     if (ids->parsed()) refuse_overwrite(json_path, {data_path}, "--json");
     if (chk->parsed()) refuse_overwrite(json_path, {model_path, data_path}, "--json");
     if (idf->parsed()) refuse_overwrite(json_path, {frf.frf_path, frf.data_path, frf.meta_path}, "--json");
@@ -679,15 +719,15 @@ int main(int argc, char** argv) {
     if (gap->parsed()) {
       refuse_overwrite(json_path, {model_path, gap_data, gap_meta}, "--json");
       refuse_overwrite(gap_table, {model_path, gap_data, gap_meta, json_path}, "--table");
-      return run_gap(json_path, model_path, gap_data, gap_meta, gap_table, gapo);
+      return run_gap(json_path, plot_path, model_path, gap_data, gap_meta, gap_table, gapo);
     }
     if (sim->parsed()) {
       refuse_overwrite(rec_out, {rec_model}, "--out");
       refuse_overwrite(rec_meta, {rec_model}, "--meta-out");
     }
-    if (t1->parsed()) return run_table1(json_path);
-    if (figs[0]->parsed()) return run_figure(json_path, 1, figo);
-    if (figs[1]->parsed()) return run_figure(json_path, 2, figo);
+    if (t1->parsed()) return run_table1(json_path, plot_path);
+    if (figs[0]->parsed()) return run_figure(json_path, plot_path, 1, figo);
+    if (figs[1]->parsed()) return run_figure(json_path, plot_path, 2, figo);
     if (idf->parsed()) return run_identify_frf(json_path, frf);
     if (sim->parsed()) {
       if (static_cast<long long>(rec.period) * rec.periods > 100000000LL)
@@ -699,10 +739,10 @@ int main(int argc, char** argv) {
       if (t2_noise == "unit-complex") t2o.noise = fdsid::NoiseVariance::UnitComplex;
       else if (t2_noise == "unit-per-component") t2o.noise = fdsid::NoiseVariance::UnitPerComponent;
       else throw fdsid::Error(fdsid::ErrorKind::Input, "--noise-variance", "\"" + t2_noise + "\" is not unit-complex or unit-per-component");
-      return run_table2(json_path, t2o);
+      return run_table2(json_path, plot_path, t2o);
     }
     if (ids->parsed())
-      return run_identify_spectrum(json_path, data_path, order, p, r, method, precision, extension);
+      return run_identify_spectrum(json_path, plot_path, data_path, order, p, r, method, precision, extension);
     if (chk->parsed()) return fdsid::cli::check(json_path, model_path, data_path, tolerance);
     if (smp->parsed()) {
       if (smp_precision == "high") {

@@ -31,12 +31,12 @@ struct RunResult {
   std::string command;     ///< the command line, for failure messages
 };
 
-/// Runs fdsid with args (stdin from /dev/null), captures stdout and stderr, and
+/// Runs exe with args (stdin from /dev/null), captures stdout and stderr, and
 /// kills it after timeout_s seconds so that a hang fails the test instead of
 /// blocking ctest.
-inline RunResult run_fdsid(const std::vector<std::string>& args, int timeout_s = 120) {
+inline RunResult run_command(const std::string& exe, const std::vector<std::string>& args, int timeout_s) {
   RunResult res;
-  res.command = kExe;
+  res.command = exe;
   for (const auto& a : args) res.command += " " + a;
 
   int out_pipe[2], err_pipe[2];
@@ -59,10 +59,10 @@ inline RunResult run_fdsid(const std::vector<std::string>& args, int timeout_s =
     close(err_pipe[0]);
     close(err_pipe[1]);
     std::vector<char*> argv;
-    argv.push_back(const_cast<char*>(kExe.c_str()));
+    argv.push_back(const_cast<char*>(exe.c_str()));
     for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
     argv.push_back(nullptr);
-    execv(kExe.c_str(), argv.data());
+    execv(exe.c_str(), argv.data());
     _exit(127);
   }
   close(out_pipe[1]);
@@ -102,6 +102,18 @@ inline RunResult run_fdsid(const std::vector<std::string>& args, int timeout_s =
   if (WIFEXITED(wstatus)) res.status = WEXITSTATUS(wstatus);
   else if (WIFSIGNALED(wstatus)) res.status = 128 + WTERMSIG(wstatus);
   return res;
+}
+
+inline RunResult run_fdsid(const std::vector<std::string>& args, int timeout_s = 120) {
+  return run_command(kExe, args, timeout_s);
+}
+
+/// Runs fdsid on a pseudo-terminal through util-linux `script` (stdout and
+/// stderr both arrive in `out`), for what fdsid prints on a terminal only.
+inline RunResult run_fdsid_via_script(const std::vector<std::string>& args, int timeout_s = 120) {
+  std::string line = kExe;
+  for (const auto& a : args) line += " '" + a + "'";
+  return run_command("/usr/bin/script", {"-qec", line, "/dev/null"}, timeout_s);
 }
 
 inline std::string describe(const RunResult& r) {

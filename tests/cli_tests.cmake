@@ -19,3 +19,21 @@ target_link_libraries(cli_frf_test PRIVATE fdsid_fast GTest::gtest_main nlohmann
 target_compile_definitions(cli_frf_test PRIVATE FDSID_EXE="$<TARGET_FILE:fdsid>")
 add_dependencies(cli_frf_test fdsid)
 fdsid_discover_tests(cli_frf_test LABELS cli unit quick WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
+
+# docs/failure-modes.md: its figures are drawn by docs/make-figures.sh (the
+# `docs` target); this runs the script into a scratch folder so that every
+# command the walkthrough cites keeps working. Release suite only (label docs,
+# not quick: the Monte Carlo reproductions take ~20 s).
+add_test(NAME DocsFigures
+  COMMAND ${CMAKE_COMMAND} -E env bash ${PROJECT_SOURCE_DIR}/docs/make-figures.sh $<TARGET_FILE:fdsid>
+          ${PROJECT_BINARY_DIR}/docs-figures-test)
+set_tests_properties(DocsFigures PROPERTIES LABELS "docs;cli" TIMEOUT 600)
+
+# --plot on every command that draws a figure, and the terminal-only progress.
+add_executable(cli_plot_test ${CMAKE_CURRENT_LIST_DIR}/cli_plot_test.cpp)
+target_link_libraries(cli_plot_test PRIVATE GTest::gtest_main)
+target_compile_definitions(cli_plot_test PRIVATE
+  FDSID_EXE="$<TARGET_FILE:fdsid>"
+  FDSID_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+add_dependencies(cli_plot_test fdsid)
+fdsid_discover_tests(cli_plot_test LABELS cli unit quick WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
