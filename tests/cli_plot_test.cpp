@@ -6,10 +6,9 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
-#include <regex>
-#include <sstream>
 
 #include "cli_harness.hpp"
+#include "svg_text.hpp"
 
 namespace fs = std::filesystem;
 using namespace fdsid::cli_harness;
@@ -31,21 +30,6 @@ class CliPlot : public ::testing::Test {
   }
   std::string path(const std::string& name) const { return (dir_ / name).string(); }
 
-  // The text of an SVG written by PLplot's svg driver (characters as &#x..; entities).
-  static std::string svg_text(const std::string& file) {
-    std::ifstream in(file);
-    std::ostringstream s;
-    s << in.rdbuf();
-    const std::string svg = s.str();
-    std::string out;
-    const std::regex entity("&#x([0-9a-fA-F]+);");
-    for (std::sregex_iterator it(svg.begin(), svg.end(), entity), end; it != end; ++it) {
-      const unsigned long c = std::stoul((*it)[1].str(), nullptr, 16);
-      out += c < 128 ? static_cast<char>(c) : '?';
-    }
-    return out;
-  }
-
   // Runs the command with --plot FILE.svg; expects success and every label.
   void expect_figure(std::vector<std::string> args, const std::string& name,
                      std::initializer_list<std::string> labels) {
@@ -54,7 +38,7 @@ class CliPlot : public ::testing::Test {
     const RunResult r = run_fdsid(args, 300);
     ASSERT_TRUE(Succeeded(r));
     ASSERT_TRUE(fs::exists(out)) << describe(r);
-    const std::string text = svg_text(out);
+    const std::string text = fdsid::testing::svg_file_text(out);
     for (const std::string& l : labels) EXPECT_NE(text.find(l), std::string::npos) << name << ": no \"" << l << "\"";
   }
 

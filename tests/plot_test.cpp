@@ -6,16 +6,16 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
-#include <regex>
 #include <sstream>
 
 #include "fdsid/error.hpp"
 #include "fdsid/figures.hpp"
 #include "fdsid/model.hpp"
 #include "fdsid/paper.hpp"
-#include "fdsid/plot.hpp"
 #include "fdsid/gap.hpp"
+#include "fdsid/plot.hpp"
 #include "fdsid/simulate.hpp"
+#include "svg_text.hpp"
 
 namespace fs = std::filesystem;
 using fdsid::plot::Figure;
@@ -42,18 +42,6 @@ std::string slurp(const fs::path& p) {
   std::ostringstream s;
   s << in.rdbuf();
   return s.str();
-}
-
-// The text of an SVG written by PLplot's svg driver: its characters are
-// numeric entities (&#x4d; ...) inside <tspan> elements; decoded to ASCII.
-std::string svg_text(const std::string& svg) {
-  std::string out;
-  const std::regex entity("&#x([0-9a-fA-F]+);");
-  for (std::sregex_iterator it(svg.begin(), svg.end(), entity), end; it != end; ++it) {
-    const unsigned long c = std::stoul((*it)[1].str(), nullptr, 16);
-    out += c < 128 ? static_cast<char>(c) : '?';
-  }
-  return out;
 }
 
 const Series* find_series(const Panel& p, const std::string& label) {
@@ -185,7 +173,7 @@ TEST(Render, SvgHasTheLabelsAndLegend) {
   fdsid::plot::render(f, out.string());
   const std::string svg = slurp(out);
   ASSERT_NE(svg.find("<svg"), std::string::npos);
-  const std::string text = svg_text(svg);
+  const std::string text = fdsid::testing::svg_text_of(svg);
   for (const char* needle : {"frequency (Hz)", "magnitude", "Title here", "measured", "flagged"})
     EXPECT_NE(text.find(needle), std::string::npos) << needle;
   // No temporary file is left beside it.
