@@ -331,7 +331,7 @@ double weighted_ls(const std::vector<Eigen::VectorXcd>& Phi, const Eigen::Vector
 
 class Diagnosis {
  public:
-  Diagnosis(const StateSpace& model, const Spectra& s, const GapOptions& o) : model_(model), s_(s), o_(o) {
+  Diagnosis(const StateSpace& model, const Spectra& s) : model_(model), s_(s), fft_(s.P) {
     penalty_ = 0.5 * std::log(2.0 * s.exc.size());
   }
 
@@ -708,7 +708,7 @@ class Diagnosis {
     a.nl.resize(0, 0);
     const Eigen::VectorXcd G = a.G();
     const int L = static_cast<int>(s_.xi.size());
-    Fft fft(s_.P);
+    Fft& fft = fft_;
     std::vector<int> lines = s_.exc;
     lines.insert(lines.end(), s_.ne.begin(), s_.ne.end());
     const LineStats st = line_stats(s_, a, lines);
@@ -820,8 +820,10 @@ class Diagnosis {
 
   const StateSpace& model_;
   const Spectra& s_;
-  const GapOptions& o_;
   double penalty_ = 0;
+  // FFTW plans of length P, made once per diagnosis (fit_nonlinearity runs for
+  // every candidate set); one diagnosis runs on one thread.
+  mutable Fft fft_;
 };
 
 Spectra spectra_of(const Eigen::MatrixXd& record, const RecordMeta& meta, Domain domain) {
@@ -915,7 +917,7 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
   const Spectra s = spectra_of(record, meta, model.domain);
   if (s.exc.size() < 4)
     throw Error(ErrorKind::Input, "meta field \"excited_lines\"", "needs at least 4 excited lines below P/2");
-  Diagnosis dg(model, s, options);
+  Diagnosis dg(model, s);
 
   GapReport rep;
   rep.options = options;
@@ -989,7 +991,8 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
   }
   // Leakage: drop the periods the period-deviation test flags.
   int drop = 0;
-  while (s.M - drop - 1 >= 4 && dg.leakage_p(a0, drop) < options.alpha) ++drop;
+  for (double p = rep.p_leakage; s.M - drop - 1 >= 4 && p < options.alpha;)  // p = leakage_p(a0, drop)
+    if (s.M - ++drop - 1 >= 4) p = dg.leakage_p(a0, drop);
   // The transient decays geometrically: the first period the test passes still
   // carries some of it. One more period goes when at least 4 remain after it.
   if (drop > 0 && s.M - drop - 1 >= 4) ++drop;
