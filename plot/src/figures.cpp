@@ -312,7 +312,7 @@ Figure spectrum_figure(const SpectrumData& d, const SpectrumResult& res) {
   const int m = d.m;
   // Data on the grid and the model on a grid 4 times as fine.
   Panel spec, resid;
-  spec.title = "spectrum: data and identified G(z)G#uT#d(1/z), order " + std::to_string(res.order);
+  spec.title = "power spectrum: data and identified G(z)G#uT#d(1/z)";
   spec.x = axis("#gw/#gp (#gw in rad/sample)", false, 0, 1);
   spec.y = axis("S(e#uj#gw#d)" + std::string(m > 1 ? " (diagonal entries)" : ""), true);
   int non_positive = 0;
@@ -335,8 +335,9 @@ Figure spectrum_figure(const SpectrumData& d, const SpectrumResult& res) {
         ++non_positive;
       }
     }
-    model.label = "identified" + (m > 1 ? " #d" + ij + "#u" : std::string());
+    model.label = "identified, n = " + std::to_string(res.order) + (m > 1 ? " #d" + ij + "#u" : std::string());
     model.colour = kCycle[(2 * a + 1) % 10];
+    model.dashed = true;  // the data show between the dashes
     const int fine = std::min(4 * d.M, 4000);
     for (int k = 0; k <= fine; ++k) {
       const double w = kPi * k / fine;
@@ -350,7 +351,7 @@ Figure spectrum_figure(const SpectrumData& d, const SpectrumResult& res) {
   // samples (noise near a zero of the spectrum) cannot be shown on it.
   spec.y.log = hi > 10 * lo && non_positive <= (d.M + 1) * m / 100;
   if (spec.y.log && non_positive > 0)
-    spec.title += " (" + std::to_string(non_positive) + " samples <= 0 not shown)";
+    spec.series.front().label += " (" + std::to_string(non_positive) + " <= 0 not shown)";
   resid.title = "relative residual on the grid";
   resid.x = spec.x;
   resid.y = axis("||S#dk#u - Ŝ#dk#u||#dF#u / ||Ŝ#dk#u||#dF#u  (Ŝ: identified)", true);
