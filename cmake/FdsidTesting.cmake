@@ -1,21 +1,44 @@
-# fdsid_discover_tests(TARGET LABELS l1;l2;... [WORKING_DIRECTORY dir])
+# fdsid_discover_tests(TARGET LABELS l1;l2;... [WORKING_DIRECTORY dir] [SLOW test1 test2 ...])
 #
 # gtest_discover_tests with a list of ctest labels. gtest_discover_tests
 # (CMake 3.25) flattens list-valued PROPERTIES ("LABELS a;b" becomes LABELS = a
 # plus a bogus property b), so the labels are set again from a CTest include file
 # that runs after the discovered tests (<target>_TESTS) are defined.
+#
+# SLOW names tests (Suite.Name) that take minutes under the coverage + ASan/UBSan
+# build (Monte Carlo loops, the 50-digit reference at -O1 under ASan): they get
+# the label `slow` instead of `quick`, so the Release run of the whole suite
+# runs them and the sanitizer/coverage run (`ctest -L quick`) does not.
 include(GoogleTest)
 function(fdsid_discover_tests target)
-  cmake_parse_arguments(ARG "" "WORKING_DIRECTORY" "LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "WORKING_DIRECTORY" "LABELS;SLOW" ${ARGN})
   if(NOT ARG_WORKING_DIRECTORY)
     set(ARG_WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
   endif()
   gtest_discover_tests(${target} WORKING_DIRECTORY ${ARG_WORKING_DIRECTORY} DISCOVERY_TIMEOUT 120)
   set(labels "${ARG_LABELS}")
+  set(slow_labels "${ARG_LABELS}")
+  list(REMOVE_ITEM slow_labels quick)
+  list(APPEND slow_labels slow)
   set(file ${CMAKE_CURRENT_BINARY_DIR}/${target}_labels.cmake)
+  # LABELS set twice on one test accumulate here, so each test is set once.
   file(WRITE ${file}
     "if(DEFINED ${target}_TESTS)\n"
-    "  set_tests_properties(\${${target}_TESTS} PROPERTIES LABELS \"${labels}\")\n"
+    "  set(slow ${ARG_SLOW})\n"
+    "  foreach(t IN LISTS slow)\n"
+    "    list(FIND ${target}_TESTS \${t} i)\n"
+    "    if(i EQUAL -1)\n"
+    "      message(FATAL_ERROR \"fdsid_discover_tests(${target}): SLOW test \${t} does not exist\")\n"
+    "    endif()\n"
+    "  endforeach()\n"
+    "  foreach(t IN LISTS ${target}_TESTS)\n"
+    "    list(FIND slow \${t} i)\n"
+    "    if(i EQUAL -1)\n"
+    "      set_tests_properties(\${t} PROPERTIES LABELS \"${labels}\")\n"
+    "    else()\n"
+    "      set_tests_properties(\${t} PROPERTIES LABELS \"${slow_labels}\")\n"
+    "    endif()\n"
+    "  endforeach()\n"
     "endif()\n")
   set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${file})
 endfunction()
