@@ -59,14 +59,11 @@ Panel singular_value_panel(const Eigen::VectorXd& sv, int marked, const std::str
   s.symbol = "•";
   s.colour = Blue;
   p.series.push_back(s);
+  p.y.headroom = 2;  // decades of room for the legend
   const double top = sv.size() ? sv.maxCoeff() : 1;
   double bottom = top;
   for (Eigen::Index i = 0; i < sv.size(); ++i)
     if (sv(i) > 0) bottom = std::min(bottom, sv(i));
-  if (bottom > 0 && top > bottom) {
-    p.y.min = bottom / 2;
-    p.y.max = top * 100;  // two decades of room for the legend
-  }
   if (marked > 0) {
     Series m;
     m.label = mark_label;
@@ -267,15 +264,7 @@ Figure std_ratio_figure(const FigureResult& r, int figure, const FigureOptions& 
   }
   ratio.series.push_back(hline("bound √((M-2)/(M-3)), Eq. (30)", x0, x1, r.bound, Red));
   ratio.series.push_back(hline("1 (no cost)", x0, x1, 1.0, Grey));
-  // Room above the bound for the legend.
-  double low = 1.0;
-  for (Eigen::Index k = 0; k < r.ratio.size(); ++k)
-    if (std::isfinite(r.ratio(k))) low = std::min(low, r.ratio(k));
-  double high = r.bound;
-  for (Eigen::Index k = 0; k < r.ratio.size(); ++k)
-    if (std::isfinite(r.ratio(k))) high = std::max(high, r.ratio(k));
-  ratio.y.min = low - 0.1 * (high - low);
-  ratio.y.max = high + 0.8 * (high - low);
+  ratio.y.headroom = 0.8;  // room above the bound for the legend
   Panel sd;
   sd.title = "standard deviations of G(e#uj#gw#d) over the runs";
   sd.x = axis("frequency f/f#ds#u", false);
@@ -284,12 +273,7 @@ Figure std_ratio_figure(const FigureResult& r, int figure, const FigureOptions& 
   const char* names[3] = {"sample subspace #gh#dS#u (#gs#u2#d estimated)", "subspace #gh (#gs#u2#d known)",
                           "#gb(#ga#d0#u) (true A, C)"};
   // β(α₀) needs the true A, C of order n_a: Fig. 1 only (Fig. 2's n_a = 1 has none).
-  double top = 0, bottom = INFINITY;
   for (int e = 0; e < (figure == 1 ? 3 : 2); ++e) {
-    if (v[e]->size()) {
-      top = std::max(top, v[e]->maxCoeff());
-      bottom = std::min(bottom, v[e]->minCoeff());
-    }
     Series q;
     q.label = names[e];
     q.x = x;
@@ -297,10 +281,7 @@ Figure std_ratio_figure(const FigureResult& r, int figure, const FigureOptions& 
     q.colour = kCycle[e];
     sd.series.push_back(q);
   }
-  if (top > 0 && bottom > 0) {
-    sd.y.min = bottom / 2;
-    sd.y.max = 10 * top;  // a decade of room for the legend
-  }
+  sd.y.headroom = 1;  // a decade of room for the legend
   sd.legend = LegendAt::TopRight;
   f.panels = {ratio, sd};
   return f;
@@ -469,7 +450,7 @@ Figure gap_figure(const GapReport& r, int periods) {
             std::to_string(periods);
   t.x = axis("frequency (Hz; cycles/sample when T#ds#u = 1)", false);
   t.y = axis("t(k) = M |Ē(k)|² / s²(k)", true);
-  double lo = 1, hi = 1;
+  t.y.headroom = 3;  // decades: the legend sits above the data
   for (size_t i = 0; i < r.steps.size(); ++i) {
     Series s;
     s.label = r.steps[i].first == "model" ? "model as given (gap " + num(r.gap_before) + ")" : r.steps[i].first;
@@ -477,15 +458,8 @@ Figure gap_figure(const GapReport& r, int periods) {
     s.x = x;
     s.y = vec(r.steps[i].second);
     s.colour = i == 0 ? Grey : kCycle[i % 10];
-    for (double v : s.y)
-      if (v > 0 && std::isfinite(v)) {
-        lo = std::min(lo, v);
-        hi = std::max(hi, v);
-      }
     t.series.push_back(s);
   }
-  t.y.min = lo / 2;
-  t.y.max = hi * 1e3;  // headroom: the legend sits above the data
   t.series.push_back(hline("noise floor E t = 1", x0, x1, 1.0, Black));
   // Per-line critical value of F(2, d), d = 2M − 2: the survival function is
   // (1 + 2x/d)^(−d/2) in closed form, so x_α = (d/2)(α^(−2/d) − 1).

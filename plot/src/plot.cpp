@@ -53,10 +53,10 @@ struct Range {
 
 // The window of one axis in world coordinates: the fixed range when given,
 // else the data's, padded by 4 % (of the log10 span on a log axis) or, on a
-// log axis spanning more than 3 decades, widened to whole decades.
-std::pair<double, double> window(const Axis& a, Range r) {
-  if (a.min < a.max) return {to_world(a.min, a.log), to_world(a.max, a.log)};
-  if (!(r.lo <= r.hi)) return {a.log ? -1.0 : 0.0, a.log ? 1.0 : 1.0};
+// log axis spanning more than 3 decades, widened to whole decades; then
+// a.headroom added above.
+std::pair<double, double> data_window(const Axis& a, Range r) {
+  if (!(r.lo <= r.hi)) return {a.log ? -1.0 : 0.0, 1.0};
   if (r.hi - r.lo < 1e-12 * std::max(1.0, std::abs(r.hi))) {
     const double d = a.log ? 0.5 : std::max(1e-3, 0.1 * std::abs(r.hi));
     return {r.lo - d, r.hi + d};
@@ -68,6 +68,13 @@ std::pair<double, double> window(const Axis& a, Range r) {
   if (a.log && r.hi - r.lo > 3.0) return {std::floor(r.lo - 0.05), std::ceil(r.hi + 0.05)};
   const double pad = 0.04 * (r.hi - r.lo);
   return {r.lo - pad, r.hi + pad};
+}
+
+std::pair<double, double> window(const Axis& a, const Range& r) {
+  if (a.min < a.max) return {to_world(a.min, a.log), to_world(a.max, a.log)};
+  auto [lo, hi] = data_window(a, r);
+  hi += a.log ? a.headroom : a.headroom * (hi - lo);
+  return {lo, hi};
 }
 
 // A log axis spanning more than 6 decades gets a major tick every k-th decade

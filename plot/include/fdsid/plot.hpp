@@ -48,6 +48,10 @@ struct Axis {
   std::string label;          ///< with units
   bool log = false;
   double min = 0, max = 0;    ///< min < max fixes the range; else it is read off the data
+  /// Room above the data for a legend placed at the top (ignored when the
+  /// range is fixed): decades on a log axis, a multiple of the data span on a
+  /// linear one.
+  double headroom = 0;
   /// Category names: ticks at 1 … n labelled with them instead of numbers
   /// (x axis, linear only).
   std::vector<std::string> categories;
