@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -40,15 +41,24 @@ Eigen::MatrixXcd power_spectrum(const StateSpace& m, cplx z) {
   return transfer(m, z) * transfer(m, 1.0 / z).transpose();
 }
 
-Eigen::VectorXcd poles(const StateSpace& m) {
-  if (m.A.rows() == 0) return {};
-  Eigen::VectorXcd ev = m.A.eigenvalues();
-  std::vector<cplx> v(ev.data(), ev.data() + ev.size());
+namespace {
+
+// Sorted by modulus, then argument (the order poles() and zeros() promise).
+Eigen::VectorXcd sorted_by_modulus(std::vector<cplx> v) {
   std::sort(v.begin(), v.end(), [](cplx a, cplx b) {
     if (std::abs(a) != std::abs(b)) return std::abs(a) < std::abs(b);
     return std::arg(a) < std::arg(b);
   });
   return Eigen::Map<Eigen::VectorXcd>(v.data(), static_cast<Eigen::Index>(v.size()));
+}
+
+}  // namespace
+
+Eigen::VectorXcd poles(const StateSpace& m) {
+  if (m.A.rows() == 0) return {};
+  Eigen::VectorXcd ev = m.A.eigenvalues();
+  std::vector<cplx> v(ev.data(), ev.data() + ev.size());
+  return sorted_by_modulus(std::move(v));
 }
 
 Eigen::VectorXcd zeros(const StateSpace& m) {
@@ -67,11 +77,7 @@ Eigen::VectorXcd zeros(const StateSpace& m) {
     if (b != 0 && std::abs(a / b) < 1e10 * scale)
       v.push_back(a / b);
   }
-  std::sort(v.begin(), v.end(), [](cplx a, cplx b) {
-    if (std::abs(a) != std::abs(b)) return std::abs(a) < std::abs(b);
-    return std::arg(a) < std::arg(b);
-  });
-  return Eigen::Map<Eigen::VectorXcd>(v.data(), static_cast<Eigen::Index>(v.size()));
+  return sorted_by_modulus(std::move(v));
 }
 
 Eigen::MatrixXd lyapunov(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q) {
