@@ -8,6 +8,7 @@
 
 #include <random>
 
+#include "linalg.hpp"
 #include "fdsid/spectrum_id.hpp"
 #include "rc_generators.hpp"
 #include "tolerance.hpp"
@@ -17,9 +18,9 @@ namespace {
 
 // sin of the largest principal angle between range(U) (orthonormal) and range(O).
 double range_error(const Eigen::MatrixXd& U, const Eigen::MatrixXd& O) {
-  const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(O).householderQ() * Eigen::MatrixXd::Identity(O.rows(), O.cols());
+  const Eigen::MatrixXd Q = fdsid::testing::thin_q(O);
   const Eigen::MatrixXd R = U - Q * (Q.transpose() * U);
-  return Eigen::JacobiSVD<Eigen::MatrixXd>(R).singularValues()(0);
+  return fdsid::testing::singular_values(Eigen::MatrixXd(R))(0);
 }
 
 // Samples plus i.i.d. Hermitian noise ε (X + X^H)/2, X with standard complex normal
@@ -63,16 +64,15 @@ RC_GTEST_PROP(Consistency, AkcayRangeConvergesVanOversheeLosesHalf, ()) {
   // Noise level: 1e-3 of σ_2n of the noise-free 𝒴 (times √M, the growth of 𝒴's
   // noise-free part is O(1) while its noise part falls like 1/√N: the level is
   // fixed per sample, as in Assumption 2.2).
-  const double eps = 1e-2 * Eigen::JacobiSVD<Eigen::MatrixXd>(akcay_matrix(
-                                fourier_coefficients(noisy(sys, 64, 0.0, 0), Extension::HermitianPart), m, p, r))
-                                .singularValues()(2 * n - 1);
+  const double eps = 1e-2 * fdsid::testing::singular_values(akcay_matrix(
+                                fourier_coefficients(noisy(sys, 64, 0.0, 0), Extension::HermitianPart), m, p, r))(2 * n - 1);
   auto mean_errors = [&](int M, double& akcay, double& vo) {
     akcay = vo = 0;
     const int R = 8;
     for (int i = 0; i < R; ++i) {
       const Eigen::MatrixXd shat = fourier_coefficients(noisy(sys, M, eps, seed + i), Extension::HermitianPart);
       const auto U = [&](const Eigen::MatrixXd& X) {
-        return Eigen::MatrixXd(Eigen::JacobiSVD<Eigen::MatrixXd>(X, Eigen::ComputeThinU).matrixU().leftCols(2 * n));
+        return Eigen::MatrixXd(fdsid::testing::left_singular_vectors(X, 2 * n));
       };
       akcay += range_error(U(akcay_matrix(shat, m, p, r)), Op) / R;
       vo += range_error(U(van_overschee_matrix(shat, m, p, r)), Op) / R;

@@ -15,6 +15,7 @@
 
 #include <random>
 
+#include "linalg.hpp"
 #include "fdsid/frf_id.hpp"
 #include "frf_tolerance.hpp"
 #include "rc_generators.hpp"
@@ -56,7 +57,7 @@ rc::Gen<Eigen::MatrixXd> gen_similarity(int n) {
     return T;
   });
   return rc::gen::suchThat(raw, [](const Eigen::MatrixXd& T) {
-    const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(T).singularValues();
+    const Eigen::VectorXd s = fdsid::testing::singular_values(Eigen::MatrixXd(T));
     return s(0) / s(s.size() - 1) <= 10.0;
   });
 }
@@ -115,7 +116,7 @@ RC_GTEST_PROP(FrfExactness, ContinuousBilinearNoiseFreeOnFiveDecades, ()) {
   const FrfResult res = identify_frf_fixed(d, n, r, ContinuousMethod::Bilinear);
   // The truth's poles carry the rounding of bilinear_to_continuous:
   // 4n u cond(I − A_w) ‖A_c‖ κ(A_c).
-  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(Eigen::MatrixXd::Identity(n, n) - wsys.A).singularValues();
+  const Eigen::VectorXd sv = fdsid::testing::singular_values(Eigen::MatrixXd(Eigen::MatrixXd::Identity(n, n) - wsys.A));
   const double truth_acc = 4.0 * n * kU * sv(0) / sv(n - 1) * spectral_norm(sys.A.cast<cplx>()) * eigenvalue_condition(sys.A);
   const NoiseFreeCheck c = check_noise_free(sys, res, d, ContinuousMethod::Bilinear, 0, truth_acc);
   tag_condition(c.eps_A);
@@ -132,9 +133,8 @@ RC_GTEST_PROP(FrfSimilarity, SameGAndPolesForASimilarTruthAndEq14RecoversIt, ())
   const int n = sys.order();
   const Eigen::MatrixXd T = *gen_similarity(n);
   StateSpace other = sys;
-  const Eigen::PartialPivLU<Eigen::MatrixXd> Tlu(T);
-  other.A = Tlu.solve(sys.A * T);
-  other.B = Tlu.solve(sys.B);
+  other.A = fdsid::testing::solve(T, Eigen::MatrixXd(sys.A * T));
+  other.B = fdsid::testing::solve(T, sys.B);
   other.C = sys.C * T;
   const int r = 2 * n + 1, F = 80;
   const Eigen::VectorXd w = *gen_discrete_grid(F);
@@ -167,9 +167,9 @@ RC_GTEST_PROP(FrfSimilarity, SameGAndPolesForASimilarTruthAndEq14RecoversIt, ())
   //   tol = cond(T₁₄) (1 + 2 r cond(O_r)) ε_A.
   const StateSpace ref = refer_realization(a.model, sys, r);
   const Eigen::MatrixXd Or = observability(sys.A, sys.C, r);
-  const Eigen::MatrixXd T14 = observability(a.model.A, a.model.C, r).householderQr().solve(Or);
+  const Eigen::MatrixXd T14 = fdsid::testing::least_squares(observability(a.model.A, a.model.C, r), Or);
   auto cond = [](const Eigen::MatrixXd& X) {
-    const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(X).singularValues();
+    const Eigen::VectorXd s = fdsid::testing::singular_values(Eigen::MatrixXd(X));
     return s(0) / s(s.size() - 1);
   };
   const double tol = cond(T14) * (1 + 2 * r * cond(Or)) * ca.eps_A;

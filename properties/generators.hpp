@@ -13,6 +13,7 @@
 
 #include <Eigen/Dense>
 
+#include "linalg.hpp"
 #include "fdsid/model.hpp"
 #include "fdsid/spectrum_id.hpp"
 
@@ -75,7 +76,7 @@ inline StateSpace make_system(const SystemSpec& s) {
       if (k < s.mixing.size()) T(r, c) += 0.3 * s.mixing[k];
     }
   StateSpace sys;
-  sys.A = T * J * T.inverse();
+  sys.A = T * J * fdsid::testing::inverse(T);
   sys.B.resize(n, m);
   sys.C.resize(m, n);
   for (int r = 0; r < n; ++r)
@@ -92,18 +93,18 @@ inline StateSpace make_system(const SystemSpec& s) {
 /// smallest eigenvalues must exceed gramian_min times their largest.
 inline bool meets_assumption_2_1(const StateSpace& sys, double rho_max = 0.95, double min_gap = 1e-2,
                                  double gramian_min = 1e-8) {
-  const Eigen::VectorXcd ev = sys.A.eigenvalues();
+  const Eigen::VectorXcd ev = fdsid::testing::eigenvalues(sys.A);
   for (Eigen::Index i = 0; i < ev.size(); ++i) {
     if (std::abs(ev(i)) > rho_max || std::abs(ev(i)) < 1e-2) return false;
     for (Eigen::Index j = 0; j < i; ++j)
       if (std::abs(ev(i) - ev(j)) < min_gap) return false;
   }
-  const Eigen::MatrixXd Z = sys.A - sys.B * sys.D.inverse() * sys.C;
-  if (Z.eigenvalues().cwiseAbs().maxCoeff() > rho_max) return false;
+  const Eigen::MatrixXd Z = sys.A - sys.B * fdsid::testing::inverse(sys.D) * sys.C;
+  if (fdsid::testing::eigenvalues(Z).cwiseAbs().maxCoeff() > rho_max) return false;
   const Eigen::MatrixXd Wc = lyapunov(sys.A, sys.B * sys.B.transpose());
   const Eigen::MatrixXd Wo = lyapunov(sys.A.transpose(), sys.C.transpose() * sys.C);
   for (const Eigen::MatrixXd* W : {&Wc, &Wo}) {
-    const Eigen::VectorXd l = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(*W).eigenvalues();
+    const Eigen::VectorXd l = fdsid::testing::symmetric_eigenvalues(*W);
     if (!(l(0) > gramian_min * l(l.size() - 1))) return false;
   }
   return true;

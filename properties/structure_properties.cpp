@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
 
+#include "linalg.hpp"
 #include "fdsid/spectrum_id.hpp"
 #include "rc_generators.hpp"
 #include "tolerance.hpp"
@@ -19,8 +20,8 @@ Eigen::MatrixXd matrix_power(const Eigen::MatrixXd& A, int k) {
   return P;
 }
 
-double sigma_min(const Eigen::MatrixXd& X) { return Eigen::JacobiSVD<Eigen::MatrixXd>(X).singularValues().minCoeff(); }
-double norm2(const Eigen::MatrixXd& X) { return Eigen::JacobiSVD<Eigen::MatrixXd>(X).singularValues()(0); }
+double sigma_min(const Eigen::MatrixXd& X) { return fdsid::testing::singular_values(Eigen::MatrixXd(X)).minCoeff(); }
+double norm2(const Eigen::MatrixXd& X) { return fdsid::testing::singular_values(Eigen::MatrixXd(X))(0); }
 
 // Random well-conditioned similarity: T = I + 0.3 X, X with entries in [-1, 1],
 // accepted when cond(T) <= 10.
@@ -42,12 +43,12 @@ RC_GTEST_PROP(Table1RankCollapse, VanOversheeLosesRankAkcayDoesNot, ()) {
   const SpectralSummands s = spectral_summands(sys);
   const SpectrumData d = noise_free(sys, M);
   const Eigen::MatrixXd shat = fourier_coefficients(d, Extension::HermitianPart);
-  const Eigen::VectorXd sv_vo = Eigen::JacobiSVD<Eigen::MatrixXd>(van_overschee_matrix(shat, m, p, r)).singularValues();
-  const Eigen::VectorXd sv_y = Eigen::JacobiSVD<Eigen::MatrixXd>(akcay_matrix(shat, m, p, r)).singularValues();
+  const Eigen::VectorXd sv_vo = fdsid::testing::singular_values(Eigen::MatrixXd(van_overschee_matrix(shat, m, p, r)));
+  const Eigen::VectorXd sv_y = fdsid::testing::singular_values(Eigen::MatrixXd(akcay_matrix(shat, m, p, r)));
 
   // Factors of Eqs. (12) and (17): O_p = [O_c O_a], Δ_r = [Δ_c; Δ_a], I_N = (I - A^N)^{-1}.
   const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
-  const Eigen::MatrixXd IN = (I - matrix_power(s.A, N)).inverse();
+  const Eigen::MatrixXd IN = fdsid::testing::inverse(Eigen::MatrixXd(I - matrix_power(s.A, N)));
   Eigen::MatrixXd Oc(p * m, n), Oa(p * m, n), Dc(n, r * m), Da(n, r * m);
   for (int k = 0; k < p; ++k) {
     Oc.middleRows(k * m, m) = s.C * matrix_power(s.A, k);
@@ -63,7 +64,7 @@ RC_GTEST_PROP(Table1RankCollapse, VanOversheeLosesRankAkcayDoesNot, ()) {
   // Eq. (12): Ĝ_pF_r = O_c I_N Δ_c + O_a (A^T)^{N-p-r} I_N^T Δ_a; the first term has
   // rank n, so by Weyl σ_{n+1} <= ||second term|| <= c ρ(A)^{N-p-r} with
   // c = κ(V) ||O_a|| ||I_N|| ||Δ_a|| (||A^k|| <= κ(V) ρ^k, V the eigenvectors of A).
-  const double rho = s.A.eigenvalues().cwiseAbs().maxCoeff();
+  const double rho = fdsid::testing::eigenvalues(s.A).cwiseAbs().maxCoeff();
   const double c = eigenvalue_condition_number_of_basis(s.A) * norm2(Oa) * norm2(IN) * norm2(Da);
   const double bound = c * std::pow(rho, N - p - r) + floor;
   RC_LOG() << "M = " << M << ", sigma_{n+1}(G_pF_r) = " << sv_vo(n) << ", bound " << bound << "\n";
@@ -88,9 +89,8 @@ RC_GTEST_PROP(Similarity, EigenvaluesAndSpectrumDoNotDependOnTheRealisation, ())
   const int n = sys.order(), m = sys.outputs();
   const Eigen::MatrixXd T = *gen_similarity(n);
   StateSpace other = sys;
-  const Eigen::PartialPivLU<Eigen::MatrixXd> Tlu(T);
-  other.A = Tlu.solve(sys.A * T);
-  other.B = Tlu.solve(sys.B);
+  other.A = fdsid::testing::solve(T, Eigen::MatrixXd(sys.A * T));
+  other.B = fdsid::testing::solve(T, sys.B);
   other.C = sys.C * T;
   const int M = *rc::gen::inRange(4 * n + 1, 201);
   SpectrumOptions o;
@@ -121,15 +121,14 @@ RC_GTEST_PROP(Similarity, RotatingTheSvdBasisLeavesTheEigenvaluesOfAUnchanged, (
   const int n = sys.order(), m = sys.outputs(), M = 64, p = 2 * n + 2, r = 2 * n + 1;
   const Eigen::MatrixXd Y =
       akcay_matrix(fourier_coefficients(noise_free(sys, M), Extension::HermitianPart), m, p, r);
-  const Eigen::MatrixXd U = Eigen::JacobiSVD<Eigen::MatrixXd>(Y, Eigen::ComputeThinU).matrixU().leftCols(2 * n);
+  const Eigen::MatrixXd U = fdsid::testing::left_singular_vectors(Y, 2 * n);
   const std::vector<double> q = *rc::gen::container<std::vector<double>>(4 * n * n, gen_unit_interval());
-  const Eigen::MatrixXd Q = Eigen::HouseholderQR<Eigen::MatrixXd>(Eigen::Map<const Eigen::MatrixXd>(q.data(), 2 * n, 2 * n) +
-                                                                  3.0 * Eigen::MatrixXd::Identity(2 * n, 2 * n))
-                                .householderQ();
+  const Eigen::MatrixXd Q = fdsid::testing::thin_q(Eigen::MatrixXd(Eigen::Map<const Eigen::MatrixXd>(q.data(), 2 * n, 2 * n) +
+                                                                     3.0 * Eigen::MatrixXd::Identity(2 * n, 2 * n)));
   const Eigen::MatrixXd A1 = shift_matrix(U, m), A2 = shift_matrix(U * Q, m);
   const Eigen::MatrixXd JdU = U.topRows(U.rows() - m);
   const double tol = 16.0 * p * m * kU * eigenvalue_condition(A1) * norm2(A1) * norm2(JdU) / sigma_min(JdU);
-  const Eigen::VectorXcd e1 = A1.eigenvalues(), e2 = A2.eigenvalues();
+  const Eigen::VectorXcd e1 = fdsid::testing::eigenvalues(A1), e2 = fdsid::testing::eigenvalues(A2);
   double worst = 0;
   for (Eigen::Index i = 0; i < e1.size(); ++i) worst = std::max(worst, (e2.array() - e1(i)).abs().minCoeff());
   RC_LOG() << "eigenvalue difference " << worst << ", tolerance " << tol << "\n";
@@ -150,9 +149,8 @@ RC_GTEST_PROP(Similarity, Eq14ReferralIsInvariantAndRecoversTheTrueRealisation, 
   const SpectrumResult res = identify_spectrum(noise_free(sys, M), o);
   const Eigen::MatrixXd P = *gen_similarity(n);
   StateSpace moved = res.model;
-  const Eigen::PartialPivLU<Eigen::MatrixXd> Plu(P);
-  moved.A = Plu.solve(res.model.A * P);
-  moved.B = Plu.solve(res.model.B);
+  moved.A = fdsid::testing::solve(P, Eigen::MatrixXd(res.model.A * P));
+  moved.B = fdsid::testing::solve(P, res.model.B);
   moved.C = res.model.C * P;
   const int r = 2 * n;
   const StateSpace ref1 = refer_realization(res.model, sys, r), ref2 = refer_realization(moved, sys, r);

@@ -30,6 +30,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "linalg.hpp"
 #include "cli_harness.hpp"
 #include "gap_systems.hpp"
 
@@ -99,22 +100,21 @@ fdsid::StateSpace continuous_plant() {
 
 std::complex<double> G_at(const fdsid::StateSpace& s, std::complex<double> xi) {
   const Eigen::Index n = s.A.rows();
-  const Eigen::MatrixXcd R = (xi * Eigen::MatrixXcd::Identity(n, n) - s.A.cast<std::complex<double>>()).inverse();
+  const Eigen::MatrixXcd R = fdsid::testing::inverse(Eigen::MatrixXcd(xi * Eigen::MatrixXcd::Identity(n, n) - s.A.cast<std::complex<double>>()));
   return (s.C.cast<std::complex<double>>() * R * s.B.cast<std::complex<double>>())(0, 0) + s.D(0, 0);
 }
 
 /// Eigenvalue condition of A: κ₂(V) of its eigenvector matrix (the Bauer–Fike
 /// amplification of a perturbation of A into its eigenvalues).
 double eigen_condition(const Eigen::MatrixXd& A) {
-  Eigen::EigenSolver<Eigen::MatrixXd> es(A);
-  const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXcd>(es.eigenvectors()).singularValues();
+  const Eigen::VectorXd s = fdsid::testing::singular_values(fdsid::testing::eigen_decomposition(A).vectors);
   return s(0) / s(s.size() - 1);
 }
 
 /// Largest distance from a true pole to the nearest identified pole in the JSON
 /// (numbers, or decimal strings with --precision high).
 double pole_distance(const Eigen::MatrixXd& A_true, const json& poles) {
-  const Eigen::VectorXcd truth = Eigen::EigenSolver<Eigen::MatrixXd>(A_true).eigenvalues();
+  const Eigen::VectorXcd truth = fdsid::testing::eigenvalues(A_true);
   auto num = [](const json& v) { return v.is_string() ? std::stod(v.get<std::string>()) : v.get<double>(); };
   double worst = 0;
   for (Eigen::Index i = 0; i < truth.size(); ++i) {

@@ -34,6 +34,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "linalg.hpp"
 #include "fdsid/frf_id.hpp"
 #include "fdsid/model.hpp"
 #include "frf_tolerance.hpp"
@@ -146,7 +147,7 @@ TEST_P(FrfGoldenFixture, FastMatchesReference) {
       Eigen::MatrixXcd M = -inner.A.cast<cplx>();
       M.diagonal().array() += xi_of(d.omega(k));
       const Eigen::RowVectorXcd cr =
-          Eigen::PartialPivLU<Eigen::MatrixXcd>(M.transpose()).solve(inner.C.transpose().cast<cplx>()).transpose();
+          fdsid::testing::solve(Eigen::MatrixXcd(M.transpose()), Eigen::MatrixXcd(inner.C.transpose().cast<cplx>())).transpose();
       const cplx Uk = d.U[k](0, 0);
       const double wk = 1.0 / std::sqrt(d.variance[k](0, 0));
       for (int j = 0; j <= nn; ++j) {
@@ -155,7 +156,7 @@ TEST_P(FrfGoldenFixture, FastMatchesReference) {
         X(2 * k + 1, j) = v.imag();
       }
     }
-    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(X).singularValues();
+    const Eigen::VectorXd sv = fdsid::testing::singular_values(Eigen::MatrixXd(X));
     cond3 = sv(0) / sv(sv.size() - 1);
   }
   const double qr_const = testing::frf_qr_constant(F, c, r, m, p);
@@ -175,21 +176,21 @@ TEST_P(FrfGoldenFixture, FastMatchesReference) {
     w.what = "poles";
     w.derivation = eps_text + "; tol_i = eps_A ||A_inner|| kappa_i |dlambda/dmu| + back-transform 4n u cond(I-A_w) "
                               "||A_c|| kappa(A_c) + u|lambda|; nearest fast pole to each reference pole";
-    Eigen::EigenSolver<Eigen::MatrixXd> es(inner.A);
-    const Eigen::MatrixXcd V = es.eigenvectors();
-    const Eigen::MatrixXcd W = V.inverse();
+    const fdsid::testing::EigenDecomposition es = fdsid::testing::eigen_decomposition(inner.A);
+    const Eigen::MatrixXcd& V = es.vectors;
+    const Eigen::MatrixXcd& W = es.inverse_vectors;
     const double nA = testing::spectral_norm(inner.A.cast<cplx>());
     double back = 0;
     if (cont && method == ContinuousMethod::Bilinear) {
       const Eigen::VectorXd sv =
-          Eigen::JacobiSVD<Eigen::MatrixXd>(Eigen::MatrixXd::Identity(n, n) - inner.A).singularValues();
+          fdsid::testing::singular_values(Eigen::MatrixXd(Eigen::MatrixXd::Identity(n, n) - inner.A));
       back = 4.0 * n * kU * sv(0) / sv(n - 1) * testing::spectral_norm(est.A.cast<cplx>()) *
              testing::eigenvalue_condition(est.A);
     }
     Eigen::VectorXcd lam(n);
     Eigen::VectorXd tol_i(n);
     for (int i = 0; i < n; ++i) {
-      const cplx mu = es.eigenvalues()(i);
+      const cplx mu = es.values(i);
       const double kappa = V.col(i).norm() * W.row(i).norm();
       double deriv = 1;
       lam(i) = mu;

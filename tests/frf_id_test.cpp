@@ -12,6 +12,7 @@
 #include <limits>
 #include <random>
 
+#include "linalg.hpp"
 #include "fdsid/error.hpp"
 #include "fdsid/frf_id.hpp"
 #include "fdsid/paper.hpp"
@@ -180,12 +181,12 @@ TEST(BilinearToContinuous, MatchesTheWDomainModelOnTheImaginaryAxis) {
   w.B = Eigen::MatrixXd::NullaryExpr(n, 2, [&] { return u(rng); });
   w.C = Eigen::MatrixXd::NullaryExpr(3, n, [&] { return u(rng); });
   w.D = Eigen::MatrixXd::NullaryExpr(3, 2, [&] { return u(rng); });
-  ASSERT_LT(w.A.eigenvalues().cwiseAbs().maxCoeff(), 1.0);
+  ASSERT_LT(fdsid::testing::eigenvalues(w.A).cwiseAbs().maxCoeff(), 1.0);
   const double ws = 7.5;
   const StateSpace c = bilinear_to_continuous(w, ws);
   EXPECT_EQ(c.domain, Domain::Continuous);
   auto cond = [](const Eigen::MatrixXcd& X) {
-    const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXcd>(X).singularValues();
+    const Eigen::VectorXd s = fdsid::testing::singular_values(Eigen::MatrixXcd(X));
     return s(0) / s(s.size() - 1);
   };
   const Eigen::MatrixXcd I = Eigen::MatrixXcd::Identity(n, n);

@@ -32,6 +32,7 @@
 
 #include "fdsid/frf_id.hpp"
 #include "fdsid/model.hpp"
+#include "linalg.hpp"
 #include "tolerance.hpp"
 
 namespace fdsid::testing {
@@ -48,14 +49,14 @@ inline StateSpace continuous_to_bilinear(const StateSpace& c, double omega_scale
   const int n = c.order();
   const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
   const Eigen::MatrixXd At = c.A / omega_scale;
-  const Eigen::PartialPivLU<Eigen::MatrixXd> lu(I + At);
+  const Eigen::MatrixXd IA = I + At;
   StateSpace w;
   w.domain = Domain::Discrete;
   w.sample_time = c.sample_time;
-  w.A = lu.solve(At - I);  // (Ã + I)⁻¹(Ã − I) = (Ã − I)(Ã + I)⁻¹: the factors commute
-  w.B = std::sqrt(2.0) * lu.solve(c.B) / omega_scale;
-  w.C = std::sqrt(2.0) * c.C * lu.inverse();
-  w.D = c.D - c.C * lu.solve(c.B) / omega_scale;
+  w.A = solve(IA, Eigen::MatrixXd(At - I));  // (Ã + I)⁻¹(Ã − I) = (Ã − I)(Ã + I)⁻¹: the factors commute
+  w.B = std::sqrt(2.0) * solve(IA, c.B) / omega_scale;
+  w.C = std::sqrt(2.0) * c.C * inverse(IA);
+  w.D = c.D - c.C * solve(IA, c.B) / omega_scale;
   return w;
 }
 
@@ -66,7 +67,7 @@ inline cplx bilinear_point(double omega, double omega_scale) {
 }
 
 inline double spectral_norm(const Eigen::MatrixXcd& X) {
-  return X.size() == 0 ? 0.0 : Eigen::JacobiSVD<Eigen::MatrixXcd>(X).singularValues()(0);
+  return X.size() == 0 ? 0.0 : fdsid::testing::singular_values(Eigen::MatrixXcd(X))(0);
 }
 
 /// s(ξ) of the derivation: first-order sensitivity of G(ξ) to relative
@@ -74,10 +75,9 @@ inline double spectral_norm(const Eigen::MatrixXcd& X) {
 inline double transfer_sensitivity(const StateSpace& m, cplx xi) {
   Eigen::MatrixXcd M = -m.A.cast<cplx>();
   M.diagonal().array() += xi;
-  const Eigen::PartialPivLU<Eigen::MatrixXcd> lu(M);
-  const Eigen::MatrixXcd RB = lu.solve(m.B.cast<cplx>());
+  const Eigen::MatrixXcd RB = solve(M, Eigen::MatrixXcd(m.B.cast<cplx>()));
   const Eigen::MatrixXcd CR =
-      Eigen::PartialPivLU<Eigen::MatrixXcd>(M.transpose()).solve(m.C.transpose().cast<cplx>()).transpose();
+      solve(Eigen::MatrixXcd(M.transpose()), Eigen::MatrixXcd(m.C.transpose().cast<cplx>())).transpose();
   const double nA = spectral_norm(m.A.cast<cplx>()), nB = spectral_norm(m.B.cast<cplx>()),
                nC = spectral_norm(m.C.cast<cplx>()), nD = spectral_norm(m.D.cast<cplx>());
   return spectral_norm(CR) * nA * spectral_norm(RB) + nC * spectral_norm(RB) + spectral_norm(CR) * nB + nD;
@@ -176,9 +176,9 @@ inline NoiseFreeCheck check_noise_free(const StateSpace& truth, const FrfResult&
   // ‖x_i‖ ‖y_i‖ / |y_iᴴ x_i|, first-order Bauer–Fike per eigenvalue), mapped to
   // the model's domain by the derivative of λ(μ).
   const Eigen::VectorXcd pt = poles(truth);
-  Eigen::EigenSolver<Eigen::MatrixXd> es(inner.A);
-  const Eigen::MatrixXcd V = es.eigenvectors();
-  const Eigen::MatrixXcd W = V.inverse();
+  const EigenDecomposition es = eigen_decomposition(inner.A);
+  const Eigen::MatrixXcd& V = es.vectors;
+  const Eigen::MatrixXcd& W = es.inverse_vectors;
   const double nA = spectral_norm(inner.A.cast<cplx>());
   const Eigen::Index n = inner.A.rows();
   // Rounding outside Algorithm 1 itself: the truth's poles, and for the
@@ -190,13 +190,13 @@ inline NoiseFreeCheck check_noise_free(const StateSpace& truth, const FrfResult&
   double back = 0;
   if (cont && method == ContinuousMethod::Bilinear) {
     const Eigen::VectorXd sv =
-        Eigen::JacobiSVD<Eigen::MatrixXd>(Eigen::MatrixXd::Identity(n, n) - inner.A).singularValues();
+        fdsid::testing::singular_values(Eigen::MatrixXd(Eigen::MatrixXd::Identity(n, n) - inner.A));
     back = 4.0 * n * kU * sv(0) / sv(n - 1) * spectral_norm(est.A.cast<cplx>()) * eigenvalue_condition(est.A);
   }
   Eigen::VectorXcd lam(n);
   Eigen::VectorXd tol_i(n);
   for (Eigen::Index i = 0; i < n; ++i) {
-    const cplx mu = es.eigenvalues()(i);
+    const cplx mu = es.values(i);
     const double kappa = V.col(i).norm() * W.row(i).norm();
     double d = 1;
     lam(i) = mu;

@@ -2,6 +2,7 @@
 // summands (Akçay 2011, Eqs. 2-3 and the summand split of Section 3).
 #include <gtest/gtest.h>
 
+#include "linalg.hpp"
 #include "fdsid/error.hpp"
 #include "fdsid/model.hpp"
 #include "fdsid/paper.hpp"
@@ -74,7 +75,7 @@ TEST(Model, LyapunovRefusesUnstableA) {
 // (ρ = 0.954), a relative tolerance of 64 n^2 u / (1 - ρ^2) bounds the gap.
 void expect_summands_match(const StateSpace& sys) {
   const SpectralSummands s = spectral_summands(sys);
-  const double rho = sys.A.eigenvalues().cwiseAbs().maxCoeff();
+  const double rho = fdsid::testing::eigenvalues(sys.A).cwiseAbs().maxCoeff();
   const int n = sys.order();
   const double tol = 64.0 * n * n * kU / (1 - rho * rho);
   double worst = 0, scale = 0;

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "linalg.hpp"
 #include "fdsid/error.hpp"
 #include "fdsid/paper.hpp"
 #include "fdsid/spectrum_id.hpp"
@@ -51,8 +52,8 @@ void expect_interpolation(const StateSpace& sys, int M, int order_option) {
   const double ptol = eigenvalue_condition(sys.A) * tol;
   EXPECT_LE(pole_error(sys, r.model), ptol) << "tolerance κ(A) x spectrum tolerance = " << ptol;
   // Minimum phase: the zeros of Ĝ, eig(Â - B̂ D̂^{-1} Ĉ), lie inside the circle.
-  const Eigen::MatrixXd Z = r.model.A - r.model.B * r.model.D.inverse() * r.model.C;
-  EXPECT_LT(Z.eigenvalues().cwiseAbs().maxCoeff(), 1.0);
+  const Eigen::MatrixXd Z = r.model.A - r.model.B * fdsid::testing::inverse(r.model.D) * r.model.C;
+  EXPECT_LT(fdsid::testing::eigenvalues(Z).cwiseAbs().maxCoeff(), 1.0);
 }
 
 TEST(FourierCoefficients, AreAliasedCovariancesOfTheSummands) {
@@ -68,7 +69,7 @@ TEST(FourierCoefficients, AreAliasedCovariancesOfTheSummands) {
   const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(4, 4);
   Eigen::MatrixXd AN = I;
   for (int i = 0; i < N; ++i) AN = AN * sys.A;
-  const Eigen::MatrixXd IN = (I - AN).inverse();
+  const Eigen::MatrixXd IN = fdsid::testing::inverse(Eigen::MatrixXd(I - AN));
   const double tol = 16 * std::log2(N) * kU * d.S.cwiseAbs().maxCoeff();
   Eigen::MatrixXd Ak = I;  // A^{k-1}
   for (int k = 1; k < N; ++k) {
@@ -86,7 +87,7 @@ TEST(AkcayMatrix, HasRankTwoNOnNoiseFreeData) {
   // bounded by ||δ𝒴|| <= (p + r) log2(N) u ||S||_inf (see tolerance.hpp).
   const SpectrumData d = noise_free(akcay_example_system(), 256);
   const Eigen::MatrixXd Y = akcay_matrix(fourier_coefficients(d, Extension::HermitianPart), 1, 50, 50);
-  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(Y).singularValues();
+  const Eigen::VectorXd sv = fdsid::testing::singular_values(Eigen::MatrixXd(Y));
   EXPECT_GT(sv(7), 1.0);
   EXPECT_LE(sv(8), 100 * std::log2(512.0) * kU * d.S.cwiseAbs().maxCoeff());
 }

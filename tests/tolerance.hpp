@@ -7,6 +7,7 @@
 #include <Eigen/Dense>
 
 #include "fdsid/compare.hpp"
+#include "linalg.hpp"
 
 namespace fdsid::testing {
 
@@ -23,9 +24,9 @@ inline double spectrum_tolerance(int p, int r, int m, int N, double sigma1_over_
 
 /// Eigenvalue condition number max_i ||x_i|| ||y_i|| / |y_i^H x_i| of A.
 inline double eigenvalue_condition(const Eigen::MatrixXd& A) {
-  Eigen::EigenSolver<Eigen::MatrixXd> es(A);
-  const Eigen::MatrixXcd V = es.eigenvectors();
-  const Eigen::MatrixXcd W = V.inverse();
+  const EigenDecomposition es = eigen_decomposition(A);
+  const Eigen::MatrixXcd& V = es.vectors;
+  const Eigen::MatrixXcd& W = es.inverse_vectors;
   double k = 1.0;
   for (Eigen::Index i = 0; i < A.rows(); ++i) k = std::max(k, V.col(i).norm() * W.row(i).norm());
   return k;
@@ -34,10 +35,9 @@ inline double eigenvalue_condition(const Eigen::MatrixXd& A) {
 /// κ(V) = ||V|| ||V^{-1}|| of the eigenvector matrix of A (columns normalised):
 /// ||A^k||_2 <= κ(V) ρ(A)^k for diagonalisable A.
 inline double eigenvalue_condition_number_of_basis(const Eigen::MatrixXd& A) {
-  Eigen::EigenSolver<Eigen::MatrixXd> es(A);
-  Eigen::MatrixXcd V = es.eigenvectors();
+  Eigen::MatrixXcd V = eigen_decomposition(A).vectors;
   for (Eigen::Index i = 0; i < V.cols(); ++i) V.col(i).normalize();
-  const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXcd>(V).singularValues();
+  const Eigen::VectorXd s = fdsid::testing::singular_values(Eigen::MatrixXcd(V));
   return s(0) / s(s.size() - 1);
 }
 
