@@ -1,22 +1,47 @@
 #!/usr/bin/env bash
-# The whole test suite, as CI runs it: dependencies, Release build and every
-# ctest label; then one build with coverage AND AddressSanitizer +
-# UndefinedBehaviorSanitizer (-fno-sanitize-recover=all) that runs the quick
-# suite (every test but the label `slow` ones: Monte Carlo and 50-digit runs
-# that take minutes there, and `docs`) and checks the 90 % line threshold on
-# fast/ and reference/ (LeakSanitizer suppressions for fontconfig and libltdl
-# only: coverage/lsan.supp)
-# (coverage/CMakeLists.txt); then every libFuzzer target for 60 s
-# (scripts/fuzz.sh; clang, ASan + UBSan), failing on any finding.
+# The whole test suite, as CI runs it. Every test runs once, in the build that
+# suits it:
+#
+#  1. Release build (-O3) of the library, the tool, the benchmarks and the
+#     binaries that hold the `slow` tests (Monte Carlo and 50-digit runs that
+#     take minutes under the sanitizers) — only those; then the labels `slow`,
+#     `docs` (docs/make-figures.sh) and `install` (cmake --install and a
+#     find_package(fdsid) consumer, tests/consumer/).
+#  2. One build with coverage AND AddressSanitizer + UndefinedBehaviorSanitizer
+#     (-fno-sanitize-recover=all, -O1) of everything but the benchmarks, which
+#     runs the `quick` label (every other test) and checks the 90 % line
+#     threshold on fast/ and reference/ (coverage/CMakeLists.txt; LeakSanitizer
+#     suppressions for fontconfig and libltdl only: coverage/lsan.supp).
+#  3. Every libFuzzer target for FDSID_FUZZ_SECONDS (default 30) s, two at a
+#     time (scripts/fuzz.sh; clang, ASan + UBSan), failing on any finding.
+#
+# Results do not depend on the optimisation level (no -ffast-math; Eigen's
+# SSE2 kernels are explicit), so a quick test that passes at -O1 under the
+# sanitizers states the same of the -O3 build; the golden tests' tolerances are
+# derived from unit roundoff, not from one build's bits.
+# Timings of each stage are printed at the end (README: "Build and CI time").
 set -euo pipefail
 cd "$(dirname "$0")/.."
+t0=$(date +%s)
 bash scripts/install-deps.sh
-cmake -S . -B build
-cmake --build build -j2
-ctest --test-dir build --output-on-failure -j2
-cmake -S . -B build-cov -DFDSID_COVERAGE=ON -DFDSID_SANITIZE=ON -DFDSID_BUILD_BENCH=OFF
+t_deps=$(date +%s)
+
+cmake -S . -B build -DFDSID_BUILD_TESTS=ON -DFDSID_BUILD_BENCH=ON
+cmake --build build -j2 --target fdsid bench_spectrum bench_frf bench_gap \
+  paper_golden_test figure_test consistency_property_test cli_test
+t_rel_build=$(date +%s)
+ctest --test-dir build --output-on-failure -j2 -L 'slow|docs|install'
+t_rel_test=$(date +%s)
+
+cmake -S . -B build-cov -DFDSID_COVERAGE=ON -DFDSID_SANITIZE=ON -DFDSID_BUILD_TESTS=ON -DFDSID_BUILD_BENCH=OFF
 cmake --build build-cov -j2
+t_cov_build=$(date +%s)
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   LSAN_OPTIONS=suppressions=$PWD/coverage/lsan.supp:print_suppressions=0 \
   cmake --build build-cov --target coverage
-bash scripts/fuzz.sh 60
+t_cov_test=$(date +%s)
+
+bash scripts/fuzz.sh "${FDSID_FUZZ_SECONDS:-30}"
+t_fuzz=$(date +%s)
+
+echo "== CI stages (s): deps $((t_deps - t0)), release build $((t_rel_build - t_deps)), release tests $((t_rel_test - t_rel_build)), sanitizer+coverage build $((t_cov_build - t_rel_test)), its tests+report $((t_cov_test - t_cov_build)), fuzz $((t_fuzz - t_cov_test)); total $((t_fuzz - t0))"
