@@ -512,9 +512,13 @@ FrfResult identify_frf(const FrfData& data, const FrfOptions& options) {
     scale = sqrt(*lo * *hi);
   }
 
-  const Estimate est = !continuous                                  ? algorithm1_discrete(data, s, n, r)
-                       : options.continuous_method == "bilinear" ? algorithm2_1_bilinear(data, s, scale, n, r)
-                                                                 : algorithm2_2_orthogonal(data, s, scale, n, r);
+  Estimate est;
+  if (!continuous)
+    est = algorithm1_discrete(data, s, n, r);
+  else if (options.continuous_method == "bilinear")
+    est = algorithm2_1_bilinear(data, s, scale, n, r);
+  else
+    est = algorithm2_2_orthogonal(data, s, scale, n, r);
 
   FrfResult result;
   result.model.domain = data.domain;
