@@ -1,6 +1,14 @@
 // Pintelon (2002) frequency-domain subspace identification in 50-digit
 // arithmetic, transcribed from Sections 2-5 of the paper.
 //
+// The file follows the paper: Algorithm 1 is one function per step, named
+// after it (step1a_data_matrices, step1b_eliminate_input,
+// step1c_noise_weighted_svd, step2_A_C, step3_B_D), each with a header giving
+// its purpose, method (the paper's equations), numerical aspects, failures and
+// references; algorithm1 is the sequence of those calls, Algorithms 2.1 and
+// 2.2 (algorithm2_1_bilinear, algorithm2_2_orthogonal) wrap it, and
+// identify_frf checks the input and dispatches.
+//
 // Decompositions instantiated in this translation unit (each costs seconds of
 // compile time with the multiprecision scalar): LLT, JacobiSVD and
 // ColPivHouseholderQR over MatrixR. Complex linear systems are solved in their
@@ -8,7 +16,8 @@
 // come from eigenvalues() of spectrum_id.cpp.
 #include "fdsid/reference/frf_id.hpp"
 
-#include <boost/math/constants/constants.hpp>
+#include "common.hpp"
+
 #include <Eigen/Dense>
 
 #include <algorithm>
@@ -18,6 +27,9 @@
 namespace fdsid::reference {
 namespace {
 
+using detail::finite;
+using detail::fmt;
+using detail::kron;
 using VectorR = Eigen::Matrix<Real, Eigen::Dynamic, 1>;
 using VectorC = Eigen::Matrix<Complex, Eigen::Dynamic, 1>;
 
@@ -26,29 +38,63 @@ const Real& unit_roundoff() {
   return u;
 }
 
-std::string fmt(const Real& x, int digits = 6) {
-  return x.str(digits, std::ios_base::scientific);
+// 1000 u: the numerical-rank threshold of every column-pivoted QR here, and
+// the relative size below which a Gram–Schmidt remainder counts as zero.
+const Real& rank_tolerance() {
+  static const Real tolerance = Real(1000) * unit_roundoff();
+  return tolerance;
 }
 
 std::string at(std::size_t k) { return "frequency index " + std::to_string(k); }
 
-bool finite(const Real& x) { return (boost::multiprecision::isfinite)(x); }
-bool finite(const Complex& z) { return finite(z.real()) && finite(z.imag()); }
-
-// X ⊗ Y (Kronecker product), as in the paper's notation section.
-MatrixC kron(const MatrixC& X, const MatrixC& Y) {
-  MatrixC K(X.rows() * Y.rows(), X.cols() * Y.cols());
-  for (Eigen::Index i = 0; i < X.rows(); ++i)
-    for (Eigen::Index j = 0; j < X.cols(); ++j)
-      K.block(i * Y.rows(), j * Y.cols(), Y.rows(), Y.cols()) = X(i, j) * Y;
-  return K;
-}
+// ---------------------------------------------------------------------------
+// Input checks
 
 // Dimensions of validated data.
 struct Shape {
   int F = 0, m = 0, p = 0, c = 0;
 };
 
+template <class Matrix>
+void check_shape(const char* name, const Matrix& X, int rows, int cols, std::size_t k) {
+  if (X.rows() != rows || X.cols() != cols)
+    throw InputError(std::string("data: ") + name + " at " + at(k) + " is " +
+                     std::to_string(X.rows()) + "x" + std::to_string(X.cols()) + ", expected " +
+                     std::to_string(rows) + "x" + std::to_string(cols));
+}
+
+void check_finite(const char* name, const Complex& x, int i, int j, std::size_t k) {
+  if (!finite(x))
+    throw InputError(std::string("data: ") + name + "(" + std::to_string(i) + "," +
+                     std::to_string(j) + ") at " + at(k) + " is not finite");
+}
+
+// Frequency k: ω in range for the domain, shapes of U, Y, variance, finite
+// entries and positive variances.
+void check_frequency(const FrfData& d, const Shape& s, std::size_t k) {
+  const Real pi = boost::math::constants::pi<Real>();
+  const Real& w = d.omega[k];
+  if (!finite(w)) throw InputError("data: omega at " + at(k) + " is not finite");
+  if (d.domain == "discrete" && (w < 0 || w > pi))
+    throw InputError("data: omega = " + fmt(w) + " at " + at(k) + " is outside [0, pi] (discrete)");
+  if (d.domain == "continuous" && !(w > 0))
+    throw InputError("data: omega = " + fmt(w) + " at " + at(k) + " is not > 0 (continuous)");
+  check_shape("U", d.U[k], s.m, s.c, k);
+  check_shape("Y", d.Y[k], s.p, s.c, k);
+  check_shape("variance", d.variance[k], s.p, s.c, k);
+  for (int i = 0; i < s.m; ++i)
+    for (int j = 0; j < s.c; ++j) check_finite("U", d.U[k](i, j), i, j, k);
+  for (int i = 0; i < s.p; ++i)
+    for (int j = 0; j < s.c; ++j) {
+      check_finite("Y", d.Y[k](i, j), i, j, k);
+      const Real& v = d.variance[k](i, j);
+      if (!finite(v) || !(v > 0))
+        throw InputError("data: variance(" + std::to_string(i) + "," + std::to_string(j) +
+                         ") = " + fmt(v) + " at " + at(k) + " is not a positive number");
+    }
+}
+
+// The data of Eq. (3)/(15): domain, sizes, every frequency, distinct ω.
 Shape check_data(const FrfData& d) {
   if (d.domain != "discrete" && d.domain != "continuous")
     throw InputError("data: domain \"" + d.domain + "\" is neither \"discrete\" nor \"continuous\"");
@@ -66,43 +112,7 @@ Shape check_data(const FrfData& d) {
   if (s.m < 1 || s.c < 1 || s.p < 1)
     throw InputError("data: U[0] is " + std::to_string(s.m) + "x" + std::to_string(s.c) +
                      " and Y[0] has " + std::to_string(s.p) + " rows; all must be >= 1");
-  const Real pi = boost::math::constants::pi<Real>();
-  for (std::size_t k = 0; k < d.omega.size(); ++k) {
-    const Real& w = d.omega[k];
-    if (!finite(w)) throw InputError("data: omega at " + at(k) + " is not finite");
-    if (d.domain == "discrete" && (w < 0 || w > pi))
-      throw InputError("data: omega = " + fmt(w) + " at " + at(k) + " is outside [0, pi] (discrete)");
-    if (d.domain == "continuous" && !(w > 0))
-      throw InputError("data: omega = " + fmt(w) + " at " + at(k) + " is not > 0 (continuous)");
-    if (d.U[k].rows() != s.m || d.U[k].cols() != s.c)
-      throw InputError("data: U at " + at(k) + " is " + std::to_string(d.U[k].rows()) + "x" +
-                       std::to_string(d.U[k].cols()) + ", expected " + std::to_string(s.m) + "x" +
-                       std::to_string(s.c));
-    if (d.Y[k].rows() != s.p || d.Y[k].cols() != s.c)
-      throw InputError("data: Y at " + at(k) + " is " + std::to_string(d.Y[k].rows()) + "x" +
-                       std::to_string(d.Y[k].cols()) + ", expected " + std::to_string(s.p) + "x" +
-                       std::to_string(s.c));
-    if (d.variance[k].rows() != s.p || d.variance[k].cols() != s.c)
-      throw InputError("data: variance at " + at(k) + " is " +
-                       std::to_string(d.variance[k].rows()) + "x" +
-                       std::to_string(d.variance[k].cols()) + ", expected " + std::to_string(s.p) +
-                       "x" + std::to_string(s.c));
-    for (int i = 0; i < s.m; ++i)
-      for (int j = 0; j < s.c; ++j)
-        if (!finite(d.U[k](i, j)))
-          throw InputError("data: U(" + std::to_string(i) + "," + std::to_string(j) + ") at " +
-                           at(k) + " is not finite");
-    for (int i = 0; i < s.p; ++i)
-      for (int j = 0; j < s.c; ++j) {
-        if (!finite(d.Y[k](i, j)))
-          throw InputError("data: Y(" + std::to_string(i) + "," + std::to_string(j) + ") at " +
-                           at(k) + " is not finite");
-        const Real& v = d.variance[k](i, j);
-        if (!finite(v) || !(v > 0))
-          throw InputError("data: variance(" + std::to_string(i) + "," + std::to_string(j) +
-                           ") = " + fmt(v) + " at " + at(k) + " is not a positive number");
-      }
-  }
+  for (std::size_t k = 0; k < d.omega.size(); ++k) check_frequency(d, s, k);
   std::vector<std::pair<Real, std::size_t>> sorted;
   for (std::size_t k = 0; k < d.omega.size(); ++k) sorted.emplace_back(d.omega[k], k);
   std::sort(sorted.begin(), sorted.end(),
@@ -113,6 +123,33 @@ Shape check_data(const FrfData& d) {
                        at(sorted[i - 1].second) + " and " + at(sorted[i].second) + ")");
   return s;
 }
+
+// The options against the data: n ≥ 1, r > n, enough equations for steps 1b
+// and 3, a known continuous method, ω_scale ≥ 0.
+void check_options(const FrfData& data, const Shape& s, const FrfOptions& options) {
+  const int n = options.order, r = options.r;
+  if (n < 1) throw InputError("options: order = " + std::to_string(n) + " < 1");
+  if (r <= n)
+    throw InputError("options: r = " + std::to_string(r) + " must exceed order = " + std::to_string(n));
+  if (2 * s.F * s.c < r * (s.m + s.p))
+    throw InputError("data: too few frequencies: 2 F c = " + std::to_string(2 * s.F * s.c) +
+                     " < r (m + p) = " + std::to_string(r * (s.m + s.p)) +
+                     " (step 1b needs Z^T to have at least as many rows as columns)");
+  if (2 * s.F * s.c * s.p < n * s.m + s.p * s.m)
+    throw InputError("data: too few frequencies: 2 F c p = " + std::to_string(2 * s.F * s.c * s.p) +
+                     " equations < n m + p m = " + std::to_string(n * s.m + s.p * s.m) +
+                     " unknowns of B, D (step 3)");
+  const std::string& method = options.continuous_method;
+  if (data.domain == "continuous" && method != "bilinear" && method != "orthogonal")
+    throw InputError("options: continuous_method \"" + method +
+                     "\" is neither \"bilinear\" nor \"orthogonal\"");
+  if (!finite(options.omega_scale) || options.omega_scale < 0)
+    throw InputError("options: omega_scale = " + fmt(options.omega_scale) +
+                     " must be >= 0 (0 = automatic)");
+}
+
+// ---------------------------------------------------------------------------
+// Linear algebra
 
 // Solves (ξI − M)X = R for complex ξ and R through the real form
 // [[aI − M, −bI], [bI, aI − M]] [Re X; Im X] = [Re R; Im R], ξ = a + jb.
@@ -126,7 +163,7 @@ bool resolvent_solve(const MatrixR& M, const Complex& xi, const MatrixC& R, Matr
   MatrixR rhs(2 * n, R.cols());
   rhs << R.real(), R.imag();
   Eigen::ColPivHouseholderQR<MatrixR> qr(big);
-  qr.setThreshold(Real(1000) * unit_roundoff());
+  qr.setThreshold(rank_tolerance());
   if (qr.rank() < 2 * n) return false;
   const MatrixR sol = qr.solve(rhs);
   X->resize(n, R.cols());
@@ -140,14 +177,16 @@ bool resolvent_solve(const MatrixR& M, const Complex& xi, const MatrixC& R, Matr
 // QR (identical in exact arithmetic, without squaring the condition number).
 bool least_squares(const MatrixR& X, const MatrixR& Y, MatrixR* theta) {
   Eigen::ColPivHouseholderQR<MatrixR> qr(X);
-  qr.setThreshold(Real(1000) * unit_roundoff());
+  qr.setThreshold(rank_tolerance());
   if (qr.rank() < X.cols()) return false;
   *theta = qr.solve(Y);
   return true;
 }
 
-// Rows of the data matrices: element (i, k) is the i-th basis polynomial at ξ_k.
-// Monomials (Eq. 7): ξ_k^i.
+// ---------------------------------------------------------------------------
+// The rows W_r(k) of the data matrices
+
+// Eq. (7): monomial rows, element (i, k) = ξ_k^i, i = 0 … r−1.
 MatrixC monomial_rows(const std::vector<Complex>& xi, int r) {
   MatrixC W(r, xi.size());
   for (std::size_t k = 0; k < xi.size(); ++k) {
@@ -162,17 +201,23 @@ MatrixC monomial_rows(const std::vector<Complex>& xi, int r) {
 
 // Real polynomials q_0 … q_{r−1} (deg q_i = i, positive leading coefficient)
 // orthonormal for ⟨p, q⟩ = Σ_k Re(p(ξ_k) w_k conj q(ξ_k)) (Alg. 2.2).
-// Gram–Schmidt applied to ξ·q_{i−1} instead of ξ^i (the same space, hence the
-// same orthonormal polynomial), repeated once ("twice is enough"); the
-// coefficients give s̃ q_j = Σ_{i ≤ j+1} H_ij q_i.
 struct PolynomialBasis {
   MatrixC values;  // r × F: q_i(ξ_k)
   MatrixR T;       // r × r lower triangular: q_i(ξ) = Σ_l T_il ξ^l
-  MatrixR H;       // r × (r−1)
+  MatrixR H;       // r × (r−1): s̃ q_j = Σ_{i ≤ j+1} H_ij q_i
 };
 
-PolynomialBasis orthonormal_basis(const std::vector<Complex>& xi, const std::vector<Real>& w,
-                                  int r, const std::string& which) {
+// Algorithm 2.2, the bases: q_0 … q_{r−1} orthonormal for the weights w_k.
+// Method: Gram–Schmidt applied to ξ·q_{i−1} instead of ξ^i (the same space,
+// hence the same orthonormal polynomial: the Arnoldi form), repeated once
+// ("twice is enough"); the coefficients give the recurrence H.
+// Numerical aspects: O(r² F). Fails: StepError(1) when all weights are zero or
+// a degree is dependent on the lower ones (remainder ≤ 1000 u relative: too
+// few frequencies with nonzero weight). References: Pintelon (2002)
+// Algorithm 2.2; Van Overschee & De Moor (1996); Pintelon & Schoukens (2001).
+PolynomialBasis algorithm2_2_orthonormal_basis(const std::vector<Complex>& xi,
+                                               const std::vector<Real>& w, int r,
+                                               const std::string& which) {
   const std::size_t F = xi.size();
   PolynomialBasis basis;
   basis.values = MatrixC::Zero(r, F);
@@ -205,7 +250,7 @@ PolynomialBasis orthonormal_basis(const std::vector<Complex>& xi, const std::vec
       }
     }
     const Real norm = sqrt(inner(v, v));
-    if (!(norm > Real(1000) * unit_roundoff() * norm_before))
+    if (!(norm > rank_tolerance() * norm_before))
       throw StepError(1, which + " polynomial basis: degree " + std::to_string(i) +
                              " is dependent on lower degrees (too few frequencies with nonzero weight)");
     basis.H(i, i - 1) = norm;
@@ -215,49 +260,59 @@ PolynomialBasis orthonormal_basis(const std::vector<Complex>& xi, const std::vec
   return basis;
 }
 
-// State-space matrices of one run of Algorithm 1.
-struct Estimate {
-  MatrixR A, B, C, D;
-  std::vector<Real> singular_values;
+// ---------------------------------------------------------------------------
+// Algorithm 1, steps 1a-3
+
+// The matrices of step 1a.
+struct DataMatrices {
+  MatrixR U_re, Y_re;  // 𝐔^re, 𝐘^re of Eq. (11): [Re 𝐔, Im 𝐔], [Re 𝐘, Im 𝐘]
+  MatrixR C_Y;         // C_Y = Re(𝐂𝐂ᴴ) of Eq. (18)
 };
 
-// Algorithm 1 (steps 1-3) with general real polynomial rows: rows_u/rows_y
-// (r × F) hold the basis polynomials at ξ_k; H == nullptr means monomials
-// (shift property Eq. 12), otherwise the generalised shift with
-// s̃ q_j = Σ_i H_ij q_i and Ĉ = Ô[block 0] / q0.
-Estimate algorithm1(const FrfData& d, const Shape& s, const std::vector<Complex>& xi,
-                    const MatrixC& rows_u, const MatrixC& rows_y, const MatrixR* H, const Real& q0,
-                    int n, int r) {
+// Step 1a, initialisation: Z = [𝐔^re; 𝐘^re] and C_Y = Re(𝐂𝐂ᴴ) (Eq. 18).
+// Method: one block column W_r(k) ⊗ U[k].col(j), W_r(k) ⊗ Y[k].col(j) per
+// frequency k and data column j (Eq. 9 with rows rows_u, rows_y), real and
+// imaginary parts side by side (Eq. 11); C_Y = Σ_{k,j} Re((W_r W_rᴴ) ⊗
+// diag σ²(k, j)). Numerical aspects: O(F c r² p) for C_Y. Fails: never.
+// References: Pintelon (2002) Eqs. (9), (11), (18).
+DataMatrices step1a_data_matrices(const FrfData& d, const Shape& s, const MatrixC& rows_u,
+                                  const MatrixC& rows_y, int r) {
   const int F = s.F, m = s.m, p = s.p, c = s.c;
   const int cols = F * c;  // complex block columns of Eq. (9)
-
-  // Step 1a: Eq. (9), (11), (18).
-  MatrixR U_re(r * m, 2 * cols), Y_re(r * p, 2 * cols);
-  MatrixR C_Y = MatrixR::Zero(r * p, r * p);
+  DataMatrices z{MatrixR(r * m, 2 * cols), MatrixR(r * p, 2 * cols), MatrixR::Zero(r * p, r * p)};
   for (int k = 0; k < F; ++k) {
     const MatrixC wu = rows_u.col(k), wy = rows_y.col(k);
     for (int j = 0; j < c; ++j) {
       const int q = k * c + j;
-      const MatrixC Uc = kron(wu, d.U[k].col(j));  // W_r(k) ⊗ U[k].col(j)
-      const MatrixC Yc = kron(wy, d.Y[k].col(j));  // W_r(k) ⊗ Y[k].col(j)
-      U_re.col(q) = Uc.real();
-      U_re.col(cols + q) = Uc.imag();
-      Y_re.col(q) = Yc.real();
-      Y_re.col(cols + q) = Yc.imag();
+      const MatrixC Uc = kron<MatrixC>(wu, d.U[k].col(j));  // W_r(k) ⊗ U[k].col(j)
+      const MatrixC Yc = kron<MatrixC>(wy, d.Y[k].col(j));  // W_r(k) ⊗ Y[k].col(j)
+      z.U_re.col(q) = Uc.real();
+      z.U_re.col(cols + q) = Uc.imag();
+      z.Y_re.col(q) = Yc.real();
+      z.Y_re.col(cols + q) = Yc.imag();
       // C_Y += Re((W_r W_rᴴ) ⊗ diag σ²(k, j))
       for (int a = 0; a < r; ++a)
         for (int b = 0; b < r; ++b) {
           const Real re = (wy(a) * std::conj(wy(b))).real();
-          for (int i = 0; i < p; ++i) C_Y(a * p + i, b * p + i) += re * d.variance[k](i, j);
+          for (int i = 0; i < p; ++i) z.C_Y(a * p + i, b * p + i) += re * d.variance[k](i, j);
         }
     }
   }
+  return z;
+}
 
-  // Step 1b: Eq. (20), 𝐘^re Π = 𝐘^re − (𝐘^re𝐔^reᵀ)(𝐔^re𝐔^reᵀ)⁻¹𝐔^re (Π not formed).
+// Step 1b, elimination of the input term: 𝐘^re Π of Eq. (20), which has the
+// Gram matrix of R22ᵀ of the QR factorisation Zᵀ = QR.
+// Method: 𝐘^re Π = 𝐘^re − (𝐘^re𝐔^reᵀ)(𝐔^re𝐔^reᵀ)⁻¹𝐔^re with Π never formed,
+// the inverse applied by Cholesky of 𝐔^re𝐔^reᵀ (Verhaegen's QR is the stable
+// way in double precision; 50 digits absorb the squared condition).
+// Numerical aspects: numerical rank deficiency is declared when the squared
+// ratio of the extreme pivots of the Cholesky factor (a lower bound on
+// 1/cond; LLT::rcond needs NumTraits<Real>::infinity(), which Boost 1.74
+// lacks) is ≤ 100 r m u. Fails: StepError(1) for rank-deficient input data.
+// References: Pintelon (2002) step 1b, Eq. (20); Verhaegen (1994).
+MatrixR step1b_eliminate_input(const MatrixR& U_re, const MatrixR& Y_re, int r, int m) {
   const MatrixR Gu = U_re * U_re.transpose();
-  // Positive definiteness by Cholesky; numerical rank deficiency by the ratio
-  // of the extreme pivots of L (a lower bound on √cond: LLT::rcond needs
-  // NumTraits<Real>::infinity(), which Boost 1.74 lacks).
   Eigen::LLT<MatrixR> llt_u(Gu);
   Real pivot_ratio = 0;
   if (llt_u.info() == Eigen::Success) {
@@ -268,9 +323,24 @@ Estimate algorithm1(const FrfData& d, const Shape& s, const std::vector<Complex>
     throw StepError(1, "U^re U^re^T is not positive definite (rank-deficient input data; "
                        "pivot ratio " + fmt(pivot_ratio) + ")");
   const MatrixR X = llt_u.solve(U_re * Y_re.transpose());  // (𝐔𝐔ᵀ)⁻¹𝐔𝐘ᵀ
-  const MatrixR YPi = Y_re - X.transpose() * U_re;        // 𝐘^re Π, stand-in for R22ᵀ
+  return Y_re - X.transpose() * U_re;                       // 𝐘^re Π, stand-in for R22ᵀ
+}
 
-  // Step 1c: C_Y = L Lᵀ; SVD of K = L⁻¹ (𝐘Π)(𝐘Π)ᵀ L⁻ᵀ = U Σ² Uᵀ; Ô_r = L U[:, 1:n].
+// Ô_r and the singular values of step 1c.
+struct ObservabilityEstimate {
+  MatrixR O;                          // Ô_r, r p × n
+  std::vector<Real> singular_values;  // Σ of C_Y^{−1/2} R22ᵀ, all r p, largest first
+};
+
+// Step 1c, reduction of the noise influence: SVD of C_Y^{−1/2} R22ᵀ = UΣVᵀ,
+// Ô_r = C_Y^{1/2} U[:, 1:n].
+// Method: C_Y = L Lᵀ (Cholesky; L is the square root), the SVD of
+// K = L⁻¹(𝐘^reΠ)(𝐘^reΠ)ᵀL⁻ᵀ = UΣ²Uᵀ (JacobiSVD, full U), Σ = √ of its
+// singular values. Numerical aspects: forming K squares the condition, so
+// singular values below ≈ √u σ_1 are not resolved; the leading n singular
+// vectors are. Fails: StepError(1) when C_Y is not positive definite.
+// References: Pintelon (2002) step 1c; McKelvey et al. (1996).
+ObservabilityEstimate step1c_noise_weighted_svd(const MatrixR& C_Y, const MatrixR& YPi, int n) {
   Eigen::LLT<MatrixR> llt_c(C_Y);
   if (llt_c.info() != Eigen::Success)
     throw StepError(1, "C_Y is not positive definite (too few frequencies for r)");
@@ -278,33 +348,55 @@ Estimate algorithm1(const FrfData& d, const Shape& s, const std::vector<Complex>
   const MatrixR M1 = llt_c.matrixL().solve(YPi);
   const MatrixR K = M1 * M1.transpose();
   Eigen::JacobiSVD<MatrixR> svd(K, Eigen::ComputeFullU);
-  Estimate est;
+  ObservabilityEstimate out;
   for (Eigen::Index i = 0; i < svd.singularValues().size(); ++i)
-    est.singular_values.push_back(sqrt(svd.singularValues()(i)));
-  const MatrixR O = L * svd.matrixU().leftCols(n);
+    out.singular_values.push_back(sqrt(svd.singularValues()(i)));
+  out.O = L * svd.matrixU().leftCols(n);
+  return out;
+}
 
-  // Step 2: Eq. (19), or the generalised shift of Alg. 2.2.
+// Step 2: Â = Ô_r[1:r−1]⁺ Ô_r[2:r], Ĉ = Ô_r[1] (Eq. 19), or, for Alg. 2.2,
+// the generalised shift Ô_r[1:r−1] Â = [Σ_{i ≤ j+1} H_ij Ô_r[i]]_j with
+// Ĉ = Ô_r[1] / q_0 (H == nullptr: monomials).
+// Method: least squares by column-pivoted Householder QR (block rows of p).
+// Fails: StepError(2) when Ô_r[1:r−1] has no full column rank n.
+// References: Pintelon (2002) step 2, Eqs. (12), (19); Van Overschee & De
+// Moor (1996) for the generalised shift.
+void step2_A_C(const MatrixR& O, int p, int r, int n, const MatrixR* H, const Real& q0,
+               MatrixR* A, MatrixR* C) {
   const MatrixR O_up = O.topRows((r - 1) * p);
   MatrixR rhs;
   if (H == nullptr) {
     rhs = O.bottomRows((r - 1) * p);  // Ô_r[2:r]
-    est.C = O.topRows(p);
+    *C = O.topRows(p);
   } else {
     rhs = MatrixR::Zero((r - 1) * p, n);
     for (int j = 0; j < r - 1; ++j)
       for (int i = 0; i <= j + 1; ++i) rhs.middleRows(j * p, p) += (*H)(i, j) * O.middleRows(i * p, p);
-    est.C = O.topRows(p) / q0;
+    *C = O.topRows(p) / q0;
   }
-  if (!least_squares(O_up, rhs, &est.A))
+  if (!least_squares(O_up, rhs, A))
     throw StepError(2, "O_r[1:r-1] does not have full column rank " + std::to_string(n));
+}
 
-  // Step 3: Eq. (17) with W = 1/σ_Y, linear in θ = [vec B; vec D] (column-major).
+// Step 3: B̂, D̂ minimising Eq. (17) with W(k) = 1/σ_Y(k), given Â, Ĉ.
+// Method: the residual Y − (Ĉ(ξ_kI − Â)⁻¹B + D)U is linear in
+// θ = [vec B; vec D] (column-major); one weighted row per real and imaginary
+// part of each output, column and frequency; (ξ_kI − Âᵀ)⁻¹Ĉᵀ by the real form
+// of the complex solve; θ by column-pivoted Householder QR.
+// Numerical aspects: 2Fcp × (n + p)m. Fails: StepError(3) when ξ_k is an
+// eigenvalue of Â or the problem is rank deficient.
+// References: Pintelon (2002) step 3, Eq. (17).
+void step3_B_D(const FrfData& d, const Shape& s, const std::vector<Complex>& xi,
+               const MatrixR& A, const MatrixR& C, MatrixR* B, MatrixR* D) {
+  const int m = s.m, p = s.p, c = s.c;
+  const int n = static_cast<int>(A.rows());
   const int n_theta = n * m + p * m;
-  MatrixR Phi_re(2 * cols * p, n_theta), rhs_re(2 * cols * p, 1);
+  MatrixR Phi_re(2 * s.F * c * p, n_theta), rhs_re(2 * s.F * c * p, 1);
   int row = 0;
-  for (int k = 0; k < F; ++k) {
+  for (int k = 0; k < s.F; ++k) {
     MatrixC PhiT;  // (ξI − Aᵀ)⁻¹Cᵀ = (C(ξI − A)⁻¹)ᵀ
-    if (!resolvent_solve(est.A.transpose(), xi[k], est.C.transpose().cast<Complex>(), &PhiT))
+    if (!resolvent_solve(A.transpose(), xi[k], C.transpose().cast<Complex>(), &PhiT))
       throw StepError(3, "xi at " + at(k) + " is an eigenvalue of the estimated A");
     for (int j = 0; j < c; ++j)
       for (int i = 0; i < p; ++i, ++row) {
@@ -324,12 +416,86 @@ Estimate algorithm1(const FrfData& d, const Shape& s, const std::vector<Complex>
   MatrixR theta;
   if (!least_squares(Phi_re, rhs_re, &theta))
     throw StepError(3, "the least-squares problem for B, D is rank deficient");
-  est.B.resize(n, m);
-  est.D.resize(p, m);
+  B->resize(n, m);
+  D->resize(p, m);
   for (int b = 0; b < m; ++b) {
-    for (int l = 0; l < n; ++l) est.B(l, b) = theta(l + n * b, 0);
-    for (int i = 0; i < p; ++i) est.D(i, b) = theta(n * m + i + p * b, 0);
+    for (int l = 0; l < n; ++l) (*B)(l, b) = theta(l + n * b, 0);
+    for (int i = 0; i < p; ++i) (*D)(i, b) = theta(n * m + i + p * b, 0);
   }
+}
+
+// State-space matrices of one run of Algorithm 1 (or 2.1, 2.2).
+struct Estimate {
+  MatrixR A, B, C, D;
+  std::vector<Real> singular_values;
+};
+
+// Algorithm 1 (steps 1-3) with general real polynomial rows: rows_u/rows_y
+// (r × F) hold the basis polynomials at ξ_k; H == nullptr means monomials
+// (shift property Eq. 12), otherwise the generalised shift with
+// s̃ q_j = Σ_i H_ij q_i and Ĉ = Ô[block 0] / q0.
+Estimate algorithm1(const FrfData& d, const Shape& s, const std::vector<Complex>& xi,
+                    const MatrixC& rows_u, const MatrixC& rows_y, const MatrixR* H, const Real& q0,
+                    int n, int r) {
+  const DataMatrices z = step1a_data_matrices(d, s, rows_u, rows_y, r);
+  const MatrixR YPi = step1b_eliminate_input(z.U_re, z.Y_re, r, s.m);
+  const ObservabilityEstimate O = step1c_noise_weighted_svd(z.C_Y, YPi, n);
+  Estimate est;
+  est.singular_values = O.singular_values;
+  step2_A_C(O.O, s.p, r, n, H, q0, &est.A, &est.C);
+  step3_B_D(d, s, xi, est.A, est.C, &est.B, &est.D);
+  return est;
+}
+
+// ---------------------------------------------------------------------------
+// Algorithms 1, 2.1, 2.2: the choice of ξ and of the rows
+
+// Algorithm 1, discrete time: ξ_k = z_k = e^{jω_k}, monomial rows (Eq. 7).
+Estimate algorithm1_discrete(const FrfData& data, const Shape& s, int n, int r) {
+  std::vector<Complex> xi(s.F);
+  for (int k = 0; k < s.F; ++k) xi[k] = Complex(cos(data.omega[k]), sin(data.omega[k]));
+  const MatrixC W = monomial_rows(xi, r);
+  return algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r);
+}
+
+// Algorithm 2.1: Algorithm 1 with ξ = w = (s̃ − 1)/(s̃ + 1), s̃ = jω/ω_scale
+// (|w| = 1), then the bilinear back-transform to s (bilinear_to_continuous).
+// Fails: as Algorithm 1, and StepError(4) when I − A_w is singular.
+// References: Pintelon (2002) Algorithm 2.1; Yang & Sanada (2000).
+Estimate algorithm2_1_bilinear(const FrfData& data, const Shape& s, const Real& scale, int n, int r) {
+  std::vector<Complex> xi(s.F);
+  for (int k = 0; k < s.F; ++k) {
+    const Complex st(Real(0), data.omega[k] / scale);
+    xi[k] = (st - Real(1)) / (st + Real(1));
+  }
+  const MatrixC W = monomial_rows(xi, r);
+  const Estimate w = algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r);
+  Model w_model;
+  w_model.A = w.A;
+  w_model.B = w.B;
+  w_model.C = w.C;
+  w_model.D = w.D;
+  const Model cont = bilinear_to_continuous(w_model, scale);
+  return Estimate{cont.A, cont.B, cont.C, cont.D, w.singular_values};
+}
+
+// Algorithm 2.2: Algorithm 1 with ξ = s̃ = jω/ω_scale and the monomial rows
+// replaced by the orthonormal bases of the inputs (weights ‖U[k]‖²_F) and of
+// the outputs (‖Y[k]‖²_F); A, B are rescaled from s̃ to s.
+// References: Pintelon (2002) Algorithm 2.2; Van Overschee & De Moor (1996).
+Estimate algorithm2_2_orthogonal(const FrfData& data, const Shape& s, const Real& scale, int n, int r) {
+  std::vector<Complex> xi(s.F);
+  std::vector<Real> weight_u(s.F), weight_y(s.F);
+  for (int k = 0; k < s.F; ++k) {
+    xi[k] = Complex(Real(0), data.omega[k] / scale);
+    weight_u[k] = data.U[k].squaredNorm();
+    weight_y[k] = data.Y[k].squaredNorm();
+  }
+  const PolynomialBasis bu = algorithm2_2_orthonormal_basis(xi, weight_u, r, "input");
+  const PolynomialBasis by = algorithm2_2_orthonormal_basis(xi, weight_y, r, "output");
+  Estimate est = algorithm1(data, s, xi, bu.values, by.values, &by.H, by.T(0, 0), n, r);
+  est.A *= scale;
+  est.B *= scale;
   return est;
 }
 
@@ -337,70 +503,22 @@ Estimate algorithm1(const FrfData& d, const Shape& s, const std::vector<Complex>
 
 FrfResult identify_frf(const FrfData& data, const FrfOptions& options) {
   const Shape s = check_data(data);
+  check_options(data, s, options);
   const int n = options.order, r = options.r;
-  if (n < 1) throw InputError("options: order = " + std::to_string(n) + " < 1");
-  if (r <= n)
-    throw InputError("options: r = " + std::to_string(r) + " must exceed order = " + std::to_string(n));
-  if (2 * s.F * s.c < r * (s.m + s.p))
-    throw InputError("data: too few frequencies: 2 F c = " + std::to_string(2 * s.F * s.c) +
-                     " < r (m + p) = " + std::to_string(r * (s.m + s.p)) +
-                     " (step 1b needs Z^T to have at least as many rows as columns)");
-  if (2 * s.F * s.c * s.p < n * s.m + s.p * s.m)
-    throw InputError("data: too few frequencies: 2 F c p = " + std::to_string(2 * s.F * s.c * s.p) +
-                     " equations < n m + p m = " + std::to_string(n * s.m + s.p * s.m) +
-                     " unknowns of B, D (step 3)");
   const bool continuous = data.domain == "continuous";
-  const std::string method = options.continuous_method;
-  if (continuous && method != "bilinear" && method != "orthogonal")
-    throw InputError("options: continuous_method \"" + method +
-                     "\" is neither \"bilinear\" nor \"orthogonal\"");
   Real scale = options.omega_scale;
-  if (!finite(scale) || scale < 0)
-    throw InputError("options: omega_scale = " + fmt(scale) + " must be >= 0 (0 = automatic)");
-  if (continuous && scale == 0) {
+  if (continuous && scale == 0) {  // automatic: the geometric mean of the band edges
     const auto [lo, hi] = std::minmax_element(data.omega.begin(), data.omega.end());
     scale = sqrt(*lo * *hi);
   }
 
-  std::vector<Complex> xi(s.F);
   Estimate est;
-  if (!continuous) {
-    for (int k = 0; k < s.F; ++k) xi[k] = Complex(cos(data.omega[k]), sin(data.omega[k]));
-    const MatrixC W = monomial_rows(xi, r);
-    est = algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r);
-  } else if (method == "bilinear") {
-    // Alg. 2.1: w = (s̃ − 1)/(s̃ + 1), s̃ = jω/ω_scale; |w| = 1.
-    for (int k = 0; k < s.F; ++k) {
-      const Complex st(Real(0), data.omega[k] / scale);
-      xi[k] = (st - Real(1)) / (st + Real(1));
-    }
-    const MatrixC W = monomial_rows(xi, r);
-    const Estimate w = algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r);
-    Model w_model;
-    w_model.A = w.A;
-    w_model.B = w.B;
-    w_model.C = w.C;
-    w_model.D = w.D;
-    const Model cont = bilinear_to_continuous(w_model, scale);
-    est.singular_values = w.singular_values;
-    est.A = cont.A;
-    est.B = cont.B;
-    est.C = cont.C;
-    est.D = cont.D;
-  } else {
-    // Alg. 2.2: ξ = s̃ with orthonormal polynomial rows.
-    std::vector<Real> weight_u(s.F), weight_y(s.F);
-    for (int k = 0; k < s.F; ++k) {
-      xi[k] = Complex(Real(0), data.omega[k] / scale);
-      weight_u[k] = data.U[k].squaredNorm();
-      weight_y[k] = data.Y[k].squaredNorm();
-    }
-    const PolynomialBasis bu = orthonormal_basis(xi, weight_u, r, "input");
-    const PolynomialBasis by = orthonormal_basis(xi, weight_y, r, "output");
-    est = algorithm1(data, s, xi, bu.values, by.values, &by.H, by.T(0, 0), n, r);
-    est.A *= scale;
-    est.B *= scale;
-  }
+  if (!continuous)
+    est = algorithm1_discrete(data, s, n, r);
+  else if (options.continuous_method == "bilinear")
+    est = algorithm2_1_bilinear(data, s, scale, n, r);
+  else
+    est = algorithm2_2_orthogonal(data, s, scale, n, r);
 
   FrfResult result;
   result.model.domain = data.domain;
@@ -484,12 +602,7 @@ std::vector<std::vector<MatrixC>> period_spectra(const std::vector<std::vector<R
       throw InputError("period_spectra: line " + std::to_string(lines[i]) + " (entry " +
                        std::to_string(i) + ") is outside 1 ... period/2 = " + std::to_string(period / 2));
   const int N = period;
-  std::vector<Complex> root(N);  // e^{−j2πq/N}
-  const Real two_pi = 2 * boost::math::constants::pi<Real>();
-  for (int q = 0; q < N; ++q) {
-    const Real angle = two_pi * Real(q) / Real(N);
-    root[q] = Complex(cos(angle), -sin(angle));
-  }
+  const detail::UnitRoots z(N);  // e^{−j2πkt/N} = conj z(kt)
   const Real scale = 1 / sqrt(Real(N));
   std::vector<std::vector<MatrixC>> out(periods, std::vector<MatrixC>(lines.size()));
   for (int l = 0; l < periods; ++l)
@@ -499,7 +612,7 @@ std::vector<std::vector<MatrixC>> period_spectra(const std::vector<std::vector<R
         Complex sum(0);
         for (int t = 0; t < N; ++t)
           sum += channels[ch][static_cast<std::size_t>(l) * N + t] *
-                 root[(static_cast<long long>(lines[i]) * t) % N];
+                 std::conj(z(static_cast<long long>(lines[i]) * t));
         Z(ch, 0) = scale * sum;  // Eq. (4)
       }
       out[l][i] = Z;

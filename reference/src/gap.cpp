@@ -7,6 +7,8 @@
 #include "fdsid/reference/frf_id.hpp"
 #include "fdsid/reference/io.hpp"
 
+#include "common.hpp"
+
 #include <boost/math/constants/constants.hpp>
 
 #include <cctype>
@@ -17,9 +19,23 @@
 namespace fdsid::reference {
 namespace {
 
-std::string fmt(const Real& x, int digits = 6) { return x.str(digits, std::ios_base::scientific); }
+using detail::finite;
+using detail::fmt;
 
-bool finite(const Real& x) { return (boost::multiprecision::isfinite)(x); }
+// The lines of one list: each in 1 … period/2 and not yet in `seen` (which
+// collects the lines of both lists, so the lists must also be disjoint).
+void check_lines(const std::vector<int>& lines, const char* which, int period, std::set<int>* seen) {
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const int k = lines[i];
+    if (k < 1 || k > period / 2)
+      throw InputError("gap_statistic: " + std::string(which) + " line " + std::to_string(k) +
+                       " (entry " + std::to_string(i) + ") is outside 1 ... period/2 = " +
+                       std::to_string(period / 2));
+    if (!seen->insert(k).second)
+      throw InputError("gap_statistic: " + std::string(which) + " line " + std::to_string(k) +
+                       " (entry " + std::to_string(i) + ") is repeated or also in the other list");
+  }
+}
 
 // Ē, s², t and p at the lines of `which` (index `offset` … into the spectra).
 LineStatistics line_statistics(const std::vector<std::vector<MatrixC>>& spectra, std::size_t offset,
@@ -86,20 +102,8 @@ GapStatistic gap_statistic(const std::vector<Real>& u, const std::vector<Real>& 
   if (excited_lines.empty()) throw InputError("gap_statistic: no excited lines");
   if (!response) throw InputError("gap_statistic: no response given");
   std::set<int> seen;
-  auto check = [&](const std::vector<int>& lines, const char* which) {
-    for (std::size_t i = 0; i < lines.size(); ++i) {
-      const int k = lines[i];
-      if (k < 1 || k > period / 2)
-        throw InputError("gap_statistic: " + std::string(which) + " line " + std::to_string(k) +
-                         " (entry " + std::to_string(i) + ") is outside 1 ... period/2 = " +
-                         std::to_string(period / 2));
-      if (!seen.insert(k).second)
-        throw InputError("gap_statistic: " + std::string(which) + " line " + std::to_string(k) +
-                         " (entry " + std::to_string(i) + ") is repeated or also in the other list");
-    }
-  };
-  check(excited_lines, "excited");
-  check(unexcited_lines, "unexcited");
+  check_lines(excited_lines, "excited", period, &seen);
+  check_lines(unexcited_lines, "unexcited", period, &seen);
 
   // Eq. (4) per period, both lists in one call: [l][j] = (U_l(k_j), Y_l(k_j))ᵀ.
   std::vector<int> all = excited_lines;

@@ -144,6 +144,11 @@ std::vector<std::string> spectrum_header(int m) {
 
 using Fail = std::function<void(int, const std::string&)>;
 
+// InputError "<path>:<line>: <what>", the one form of every CSV error.
+[[noreturn]] void fail_at(const std::string& path, int line, const std::string& what) {
+  throw InputError(path + ":" + std::to_string(line) + ": " + what);
+}
+
 // The one reader of the decimal CSV formats (spectra, FRF, records): the first
 // non-blank line is the header, which `header` checks and maps to the column
 // names used in messages; every further non-blank line must have as many
@@ -154,9 +159,7 @@ int read_decimal_csv(const std::string& path,
                      const std::function<void(const std::vector<Real>&, const std::vector<std::string>&, int, const Fail&)>& row) {
   std::ifstream in(path);
   if (!in) throw InputError(path + ": cannot open");
-  const Fail fail = [&](int line, const std::string& what) {
-    throw InputError(path + ":" + std::to_string(line) + ": " + what);
-  };
+  const Fail fail = [&](int line, const std::string& what) { fail_at(path, line, what); };
   std::string line;
   int line_number = 0;
   std::vector<std::string> names;
@@ -278,6 +281,46 @@ json result_to_json(const Result& result, bool van_overschee, int digits) {
   return j;
 }
 
+namespace {
+
+// The header of the power-spectrum CSV: omega then S_re,S_im (m = 1; also
+// S11_re,S11_im) or S11_re,S11_im,…,Smm_im, i.e. 1 + 2m² columns. Returns m;
+// `fail` (which throws) on any other header.
+int spectrum_header_size(const std::vector<std::string>& header, int header_line, const Fail& fail) {
+  if (header.empty()) fail(header_line, "empty file, expected header omega,S_re,S_im,...");
+  int m = 0;
+  const std::size_t cols = header.size();
+  while (1 + 2 * static_cast<std::size_t>(m + 1) * (m + 1) <= cols) ++m;
+  if (m < 1 || 1 + 2 * static_cast<std::size_t>(m) * m != cols)
+    fail(header_line, std::to_string(cols) + " columns; expected 1 + 2m^2 (omega,S_re,S_im for m = 1)");
+  const std::vector<std::string> expected = spectrum_header(m);
+  bool matches = header == expected;
+  if (!matches && m == 1) matches = header == std::vector<std::string>{"omega", "S11_re", "S11_im"};
+  if (!matches) {
+    std::string want;
+    for (const std::string& name : expected) want += (want.empty() ? "" : ",") + name;
+    fail(header_line, "header must be " + want);
+  }
+  return m;
+}
+
+// The omegas read must lie on ω_k = π(k−1)/M, k = 1 … M+1, to within 1e-9·π
+// (Eq. 7 of Akçay 2011; the algorithm uses the exact grid, not these values).
+void check_uniform_grid(const std::string& path, const std::vector<Real>& omega,
+                        const std::vector<int>& omega_line, int M) {
+  const Real pi = boost::math::constants::pi<Real>();
+  const Real tolerance = Real("1e-9") * pi;
+  for (std::size_t k = 0; k < omega.size(); ++k) {
+    const Real grid = pi * Real(static_cast<int>(k)) / Real(M);
+    if (abs(omega[k] - grid) > tolerance)
+      fail_at(path, omega_line[k], "omega = " + to_decimal(omega[k], 17) + " is off the uniform grid pi(k-1)/M = " +
+                                       to_decimal(grid, 17) + " (k = " + std::to_string(k + 1) +
+                                       ", M = " + std::to_string(M) + ")");
+  }
+}
+
+}  // namespace
+
 Spectrum read_spectrum_csv(const std::string& path) {
   std::vector<Real> omega;
   std::vector<int> omega_line;
@@ -286,21 +329,8 @@ Spectrum read_spectrum_csv(const std::string& path) {
   const int line_number = read_decimal_csv(
       path,
       [&](const std::vector<std::string>& header, int header_line, const Fail& fail) {
-        if (header.empty()) fail(header_line, "empty file, expected header omega,S_re,S_im,...");
-        // 1 + 2m² columns.
-        const std::size_t cols = header.size();
-        while (1 + 2 * static_cast<std::size_t>(m + 1) * (m + 1) <= cols) ++m;
-        if (m < 1 || 1 + 2 * static_cast<std::size_t>(m) * m != cols)
-          fail(header_line, std::to_string(cols) + " columns; expected 1 + 2m^2 (omega,S_re,S_im for m = 1)");
-        const std::vector<std::string> expected = spectrum_header(m);
-        bool matches = header == expected;
-        if (!matches && m == 1) matches = header == std::vector<std::string>{"omega", "S11_re", "S11_im"};
-        if (!matches) {
-          std::string want;
-          for (const std::string& name : expected) want += (want.empty() ? "" : ",") + name;
-          fail(header_line, "header must be " + want);
-        }
-        return expected;
+        m = spectrum_header_size(header, header_line, fail);
+        return spectrum_header(m);
       },
       [&](const std::vector<Real>& values, const std::vector<std::string>&, int line, const Fail&) {
         MatrixC S(m, m);
@@ -314,21 +344,10 @@ Spectrum read_spectrum_csv(const std::string& path) {
         spectrum.S.push_back(S);
       });
   spectrum.m = m;
-  auto fail = [&](int line, const std::string& what) {
-    throw InputError(path + ":" + std::to_string(line) + ": " + what);
-  };
   if (spectrum.S.size() < 2)
-    fail(line_number, "need at least 2 samples (M >= 1), got " + std::to_string(spectrum.S.size()));
+    fail_at(path, line_number, "need at least 2 samples (M >= 1), got " + std::to_string(spectrum.S.size()));
   spectrum.M = static_cast<int>(spectrum.S.size()) - 1;
-  const Real pi = boost::math::constants::pi<Real>();
-  const Real tolerance = Real("1e-9") * pi;
-  for (std::size_t k = 0; k < omega.size(); ++k) {
-    const Real grid = pi * Real(static_cast<int>(k)) / Real(spectrum.M);
-    if (abs(omega[k] - grid) > tolerance)
-      fail(omega_line[k], "omega = " + to_decimal(omega[k], 17) + " is off the uniform grid pi(k-1)/M = " +
-                              to_decimal(grid, 17) + " (k = " + std::to_string(k + 1) +
-                              ", M = " + std::to_string(spectrum.M) + ")");
-  }
+  check_uniform_grid(path, omega, omega_line, spectrum.M);
   return spectrum;
 }
 
@@ -387,7 +406,7 @@ FrfData read_frf_csv(const std::string& path, const std::string& domain) {
         data.Y.push_back(MatrixC::Constant(1, 1, Complex(values[1], values[2])));
         data.variance.push_back(MatrixR::Constant(1, 1, variance));
       });
-  if (data.omega.empty()) throw InputError(path + ":" + std::to_string(line_number) + ": no samples");
+  if (data.omega.empty()) fail_at(path, line_number, "no samples");
   return data;
 }
 
@@ -403,7 +422,7 @@ Records read_records_csv(const std::string& path) {
         records.u.push_back(values[0]);
         records.y.push_back(values[1]);
       });
-  if (records.u.empty()) throw InputError(path + ":" + std::to_string(line_number) + ": no samples");
+  if (records.u.empty()) fail_at(path, line_number, "no samples");
   return records;
 }
 

@@ -14,13 +14,13 @@
 // (orthogonal). Each test prints σ_1/σ_n and its worst error beside its bound.
 #include "fdsid/reference/frf_id.hpp"
 #include "fdsid/reference/io.hpp"
+#include "test_support.hpp"
 
 #include <boost/math/constants/constants.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdio>
-#include <initializer_list>
 #include <limits>
 #include <string>
 #include <vector>
@@ -29,21 +29,21 @@ namespace {
 
 using namespace fdsid::reference;
 
+using test::mat;
+using test::sci;
+
 const Real u = std::numeric_limits<Real>::epsilon();
 const Real pi = boost::math::constants::pi<Real>();
 
-MatrixR mat(std::initializer_list<std::initializer_list<const char*>> rows) {
-  MatrixR X(rows.size(), rows.begin()->size());
-  Eigen::Index i = 0;
-  for (const auto& row : rows) {
-    Eigen::Index j = 0;
-    for (const char* entry : row) X(i, j++) = Real(entry);  // decimal strings, never doubles
-    ++i;
-  }
-  return X;
+// Options of identify_frf: order n, r, and the continuous method (ignored for
+// discrete data).
+FrfOptions options_for(int order, int r, const char* method = "bilinear") {
+  FrfOptions options;
+  options.order = order;
+  options.r = r;
+  options.continuous_method = method;
+  return options;
 }
-
-std::string sci(const Real& x) { return x.str(3, std::ios_base::scientific); }
 
 // Pintelon (2002) Eq. (36): 4th-order discrete-time system.
 Model paper_system() {
@@ -199,18 +199,14 @@ void check_exact(const std::string& name, const Model& truth, const FrfData& dat
 TEST(FrfReference, DiscreteSisoIoNoiseFreeIsExact) {
   const Model truth = paper_system();
   const FrfData data = make_data(truth, irregular_grid(40), /*frf=*/false);
-  FrfOptions options;
-  options.order = 4;
-  options.r = 8;
+  const FrfOptions options = options_for(4, 8);
   check_exact("discrete io", truth, data, options, false, Real(10), Real("1e-30"));
 }
 
 TEST(FrfReference, DiscreteSisoFrfNoiseFreeIsExact) {
   const Model truth = paper_system();
   const FrfData data = make_data(truth, irregular_grid(40), /*frf=*/true);
-  FrfOptions options;
-  options.order = 4;
-  options.r = 8;
+  const FrfOptions options = options_for(4, 8);
   check_exact("discrete frf", truth, data, options, false, Real(10), Real("1e-30"));
 }
 
@@ -218,9 +214,7 @@ TEST(FrfReference, DiscreteSisoFrfNoiseFreeIsExact) {
 TEST(FrfReference, DiscreteMimoFrfNoiseFreeIsExact) {
   const Model truth = mimo_system();
   const FrfData data = make_data(truth, irregular_grid(30), /*frf=*/true);
-  FrfOptions options;
-  options.order = 3;
-  options.r = 6;
+  const FrfOptions options = options_for(3, 6);
   check_exact("discrete mimo frf", truth, data, options, false, Real(10), Real("1e-30"));
 }
 
@@ -235,10 +229,7 @@ TEST(FrfReference, DiscreteMimoFrfNoiseFreeIsExact) {
 TEST(FrfReference, ContinuousBilinearNoiseFreeIsExact) {
   const Model truth = continuous_system();
   const FrfData data = make_data(truth, log_grid(60, -2, 3), /*frf=*/false);
-  FrfOptions options;
-  options.order = 4;
-  options.r = 8;
-  options.continuous_method = "bilinear";
+  const FrfOptions options = options_for(4, 8, "bilinear");
   check_exact("continuous bilinear", truth, data, options, true, Real(100), Real("1e-27"));
 }
 
@@ -251,10 +242,7 @@ TEST(FrfReference, ContinuousBilinearNoiseFreeIsExact) {
 TEST(FrfReference, ContinuousOrthogonalNoiseFreeIsExact) {
   const Model truth = continuous_system();
   const FrfData data = make_data(truth, log_grid(60, -2, 3), /*frf=*/false);
-  FrfOptions options;
-  options.order = 4;
-  options.r = 8;
-  options.continuous_method = "orthogonal";
+  const FrfOptions options = options_for(4, 8, "orthogonal");
   check_exact("continuous orthogonal", truth, data, options, true, Real("1e5"), Real("1e-26"));
 }
 
@@ -264,9 +252,7 @@ TEST(FrfReference, ContinuousSimoFrfNoiseFreeIsExact) {
   truth.C = mat({{"1", "0.5", "200", "3"}, {"0", "2", "-50", "1"}});
   truth.D = mat({{"0.1"}, {"0"}});
   const FrfData data = make_data(truth, log_grid(60, -2, 3), /*frf=*/true);
-  FrfOptions options;
-  options.order = 4;
-  options.r = 8;
+  FrfOptions options = options_for(4, 8);
   check_exact("continuous bilinear simo frf", truth, data, options, true, Real(100),
               Real("1e-27"));
   options.continuous_method = "orthogonal";
@@ -286,9 +272,7 @@ TEST(FrfReference, ContinuousMimoFrfNoiseFreeIsExact) {
   truth.C = mat({{"1", "0", "0.5"}, {"0.3", "1", "-2"}});
   truth.D = mat({{"0", "0.1"}, {"0.2", "0"}});
   const FrfData data = make_data(truth, log_grid(40, -2, 2), /*frf=*/true);
-  FrfOptions options;
-  options.order = 3;
-  options.r = 6;
+  FrfOptions options = options_for(3, 6);
   check_exact("continuous bilinear mimo frf", truth, data, options, true, Real(100),
               Real("1e-27"));
   // Alg. 2.2 beyond its SISO origin (weights ‖U[k]‖²_F, ‖Y[k]‖²_F): same bound
@@ -421,9 +405,7 @@ TEST(FrfReference, SampleStatisticsPipeline) {
   const SampleStatistics st = sample_statistics("discrete", omega, U_l, Y_l);
   // σ̂²_Y = (2δ² + 2δ²)/2 = 2δ², divided by M = 3.
   EXPECT_LT(abs(st.data.variance[0](0, 0) - 2 * delta * delta / 3), Real("1e-50"));
-  FrfOptions options;
-  options.order = 4;
-  options.r = 8;
+  const FrfOptions options = options_for(4, 8);
   const FrfResult result = identify_frf(st.data, options);
   std::printf("sample pipeline: V_sub = %s\n", sci(result.v_sub).c_str());
   EXPECT_LT(result.v_sub, Real("1e-50"));

@@ -16,6 +16,7 @@
 
 #include "fdsid/reference/frf_id.hpp"
 #include "fdsid/reference/io.hpp"
+#include "test_support.hpp"
 
 #include <boost/math/constants/constants.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
@@ -37,7 +38,7 @@ const Real u = std::numeric_limits<Real>::epsilon();
 const Real pi = boost::math::constants::pi<Real>();
 const Real tol("1e-40");  // relative; derivation in the file comment
 
-std::string sci(const Real& x) { return x.str(3, std::ios_base::scientific); }
+using test::sci;
 
 Real rel(const Real& got, const Real& want) { return abs(got - want) / abs(want); }
 

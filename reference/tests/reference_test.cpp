@@ -8,6 +8,7 @@
 // prints the worst error it saw beside its bound.
 #include "fdsid/reference/io.hpp"
 #include "fdsid/reference/spectrum_id.hpp"
+#include "test_support.hpp"
 
 #include <boost/math/constants/constants.hpp>
 #include <Eigen/LU>
@@ -15,7 +16,6 @@
 
 #include <cstdio>
 #include <cstdlib>
-#include <initializer_list>
 #include <limits>
 #include <string>
 #include <tuple>
@@ -25,18 +25,9 @@ namespace {
 
 using namespace fdsid::reference;
 
-const Real u = std::numeric_limits<Real>::epsilon();
+using test::mat;
 
-MatrixR mat(std::initializer_list<std::initializer_list<const char*>> rows) {
-  MatrixR X(rows.size(), rows.begin()->size());
-  Eigen::Index i = 0;
-  for (const auto& row : rows) {
-    Eigen::Index j = 0;
-    for (const char* entry : row) X(i, j++) = Real(entry);  // decimal strings, never doubles
-    ++i;
-  }
-  return X;
-}
+const Real u = std::numeric_limits<Real>::epsilon();
 
 // Akçay (2011) Section 4 (McKelvey, Akçay & Ljung 1996), entries as printed.
 Model paper_system() {
@@ -62,7 +53,7 @@ Model mimo_system() {
   return model;
 }
 
-std::string show(const Real& x, int digits = 6) { return x.str(digits, std::ios_base::scientific); }
+std::string show(const Real& x, int digits = 6) { return test::sci(x, digits); }
 
 Complex at(const Real& omega) { return Complex(cos(omega), sin(omega)); }
 

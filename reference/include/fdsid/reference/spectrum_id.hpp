@@ -166,9 +166,10 @@ struct Result {
 /// least squares (Householder QR of the stacked real and imaginary parts)
 /// over all M+1 samples; step 9 the Riccati equation by the Riccati
 /// difference iteration from P = 0 (monotone, converges to the stabilising
-/// solution) until its change is below 1e-20, then Newton steps (each a Stein
-/// equation solved through its Kronecker form) until the change is below
-/// 1e-45 relative; B̂ = (F̂ − ÂP̂Ĉᵀ)(Ê − ĈP̂Ĉᵀ)^{−1/2},
+/// solution) until its change is below 1e-12 relative (at most 2000 steps),
+/// then Newton steps (each a Stein equation solved through its Kronecker
+/// form) until the change is below 1e-45 relative, or stalls with the
+/// residual below 1e-35 relative; B̂ = (F̂ − ÂP̂Ĉᵀ)(Ê − ĈP̂Ĉᵀ)^{−1/2},
 /// D̂ = (Ê − ĈP̂Ĉᵀ)^{1/2}, symmetric roots.
 ///
 /// Numerical aspects: 50-digit arithmetic throughout; on noise-free data the
