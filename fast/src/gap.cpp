@@ -8,7 +8,9 @@
 #include <boost/math/distributions/students_t.hpp>
 #include <boost/math/tools/minima.hpp>
 #include <cmath>
+#include <cstring>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <numeric>
 #include <tuple>
@@ -18,6 +20,70 @@
 
 namespace fdsid {
 
+const char* to_string(Effect e) {
+  switch (e) {
+    case Effect::GainError: return "gain_error";
+    case Effect::Delay: return "delay";
+    case Effect::SensorDynamics: return "sensor_dynamics";
+    case Effect::UnmodelledMode: return "unmodelled_mode";
+    case Effect::ModeMismatch: return "mode_mismatch";
+    case Effect::Nonlinearity: return "nonlinearity";
+    case Effect::Leakage: return "leakage";
+  }
+  return "?";
+}
+
+Effect effect_from_string(std::string_view name) {
+  for (Effect e : kAllEffects)
+    if (name == to_string(e)) return e;
+  std::string list;
+  for (Effect e : kAllEffects) list += (list.empty() ? "" : ", ") + std::string(to_string(e));
+  throw Error(ErrorKind::Input, "effect", "unknown effect '" + std::string(name) + "' (known: " + list + ")");
+}
+
+std::vector<std::pair<std::string, double>> parameter_list(const EffectParameters& parameters) {
+  using List = std::vector<std::pair<std::string, double>>;
+  auto flag = [](bool b) { return b ? 1.0 : 0.0; };
+  struct Lister {
+    decltype(flag) f;
+    List operator()(const GainError& p) const { return {{"gain", p.gain}}; }
+    List operator()(const Delay& p) const { return {{"samples", p.samples}, {"seconds", p.seconds}}; }
+    List operator()(const SensorDynamics& p) const {
+      List l = {{"cutoff_hz", p.cutoff_hz}};
+      if (p.order == 2) l.emplace_back("damping", p.damping);
+      l.emplace_back("discrete", f(p.discrete));
+      l.emplace_back("order", static_cast<double>(p.order));
+      return l;
+    }
+    List operator()(const UnmodelledMode& p) const {
+      List l;
+      if (p.mode) l = {{"damping", p.mode->damping}, {"frequency_hz", p.mode->frequency_hz}};
+      l.emplace_back("series", f(p.series));
+      return l;
+    }
+    List operator()(const ModeMismatch& p) const {
+      List l;
+      if (p.mode) l = {{"damping", p.mode->damping}, {"frequency_hz", p.mode->frequency_hz}};
+      if (p.model_frequency_hz) l.emplace_back("model_frequency_hz", *p.model_frequency_hz);
+      return l;
+    }
+    List operator()(const Nonlinearity& p) const {
+      if (!p.fitted) return {};
+      return {{"a2", p.a2}, {"a3", p.a3}, {"at_input", f(p.at_input)}};
+    }
+    List operator()(const Leakage& p) const {
+      return {{"transient_periods", static_cast<double>(p.transient_periods)}};
+    }
+  };
+  return std::visit(Lister{flag}, parameters);
+}
+
+static_assert(std::variant_size_v<EffectParameters> == kAllEffects.size());
+static_assert(std::is_same_v<std::variant_alternative_t<static_cast<size_t>(Effect::ModeMismatch), EffectParameters>,
+                             ModeMismatch>);
+static_assert(std::is_same_v<std::variant_alternative_t<static_cast<size_t>(Effect::Leakage), EffectParameters>,
+                             Leakage>);
+
 double f2_survival(double t, int d2) {
   // F(2, d2) has density (1 + 2t/d2)^{−d2/2 − 1}; integrating from t to ∞ gives
   // (1 + 2t/d2)^{−d2/2}.
@@ -26,8 +92,17 @@ double f2_survival(double t, int d2) {
 
 namespace {
 
-constexpr const char* kLinearEffects[] = {"gain_error", "delay", "sensor_dynamics", "unmodelled_mode",
-                                          "mode_mismatch"};
+// The linear effects: the first five of kAllEffects.
+constexpr std::array<Effect, 5> kLinearEffects = {Effect::GainError, Effect::Delay, Effect::SensorDynamics,
+                                                  Effect::UnmodelledMode, Effect::ModeMismatch};
+static_assert(is_linear(Effect::ModeMismatch) && !is_linear(Effect::Nonlinearity));
+
+// Effects ordered by name: the augmented model's factors and terms are
+// multiplied and summed in this order (as when they were keyed by name), which
+// fixes the rounding of G.
+struct ByName {
+  bool operator()(Effect a, Effect b) const { return std::strcmp(to_string(a), to_string(b)) < 0; }
+};
 
 // The record's DFT per period at every line 0 … P/2 (Eq. 4 scaling).
 struct Spectra {
@@ -93,7 +168,7 @@ class Fft {
 // first … M−1.
 struct Augment {
   Eigen::VectorXcd base;
-  std::map<std::string, Eigen::VectorXcd> mult, add;
+  std::map<Effect, Eigen::VectorXcd, ByName> mult, add;
   Eigen::MatrixXcd nl;  // M × lines, or empty
   int first = 0;
   Eigen::VectorXcd multiplier() const {
@@ -107,7 +182,7 @@ struct Augment {
     return g;
   }
   Eigen::VectorXcd G() const { return multiplier().cwiseProduct(inner()); }
-  Augment without(const std::string& e) const {
+  Augment without(Effect e) const {
     Augment a = *this;
     a.mult.erase(e);
     a.add.erase(e);
@@ -363,20 +438,24 @@ class Diagnosis {
     return boost::math::cdf(boost::math::complement(boost::math::fisher_f(q, d2), F));
   }
 
-  Trial fit(const std::string& effect, const Augment& a) const {
+  Trial fit(Effect effect, const Augment& a) const {
     const Augment b = a.without(effect);
-    if (effect == "gain_error") return fit_gain(b);
-    if (effect == "delay") return fit_delay(b);
-    if (effect == "sensor_dynamics") return fit_sensor(b);
-    if (effect == "unmodelled_mode") return fit_mode(b);
-    if (effect == "mode_mismatch") return fit_mismatch(b);
+    switch (effect) {
+      case Effect::GainError: return fit_gain(b);
+      case Effect::Delay: return fit_delay(b);
+      case Effect::SensorDynamics: return fit_sensor(b);
+      case Effect::UnmodelledMode: return fit_mode(b);
+      case Effect::ModeMismatch: return fit_mismatch(b);
+      case Effect::Nonlinearity:
+      case Effect::Leakage: break;  // leakage is no fit of the response; never asked for
+    }
     return fit_nonlinearity(b);
   }
 
   // Joint fit of a set of linear effects: each fitted in turn on top of the
   // others, then each refitted with the others fixed (coordinate descent, two
   // rounds).
-  std::pair<Augment, std::vector<EffectFit>> fit_set(const std::vector<std::string>& set, const Augment& a,
+  std::pair<Augment, std::vector<EffectFit>> fit_set(const std::vector<Effect>& set, const Augment& a,
                                                      double& V) const {
     Augment cur = a;
     std::vector<EffectFit> fits(set.size());
@@ -401,8 +480,8 @@ class Diagnosis {
       den += W.w(i) * std::norm(x);
     }
     const double g = den > 0 ? num / den : 1.0;
-    Trial t{a, {"gain_error", 0, 0, 1, 1, {{"gain", g}}}, 0};
-    t.state.mult["gain_error"] = Eigen::VectorXcd::Constant(a.base.size(), g);
+    Trial t{a, {0, 0, 1, 1, GainError{g}}, 0};
+    t.state.mult[Effect::GainError] = Eigen::VectorXcd::Constant(a.base.size(), g);
     t.V = cost(s_, W, t.state.G());
     return t;
   }
@@ -423,10 +502,10 @@ class Diagnosis {
     const double hi = std::min(100.0, s_.P / 4.0), lo = -10.0;
     const int n = static_cast<int>(std::ceil((hi - lo) * 16 * fmax)) + 2;  // ≥ 16 points per cycle at f_max
     const auto best = minimize_1d(V, lo, hi, std::max(n, 50));
-    Trial t{a, {"delay", 0, 0, 1, 1, {{"samples", best.first}, {"seconds", best.first * s_.Ts}}}, best.second};
+    Trial t{a, {0, 0, 1, 1, Delay{best.first, best.first * s_.Ts}}, best.second};
     Eigen::VectorXcd m(a.base.size());
     for (Eigen::Index k = 0; k < m.size(); ++k) m(k) = std::polar(1.0, -2 * M_PI * s_.cycles(k) * best.first);
-    t.state.mult["delay"] = m;
+    t.state.mult[Effect::Delay] = m;
     return t;
   }
 
@@ -455,7 +534,7 @@ class Diagnosis {
     const Weighted W = weighted(s_, a);
     const Eigen::VectorXcd G = a.G();
     const double fmin = s_.cycles(s_.exc.front()), fmax = s_.cycles(s_.exc.back());
-    Trial best;
+    Trial best{{}, {0, 0, 0, 1, SensorDynamics{}}, 0};
     double best_score = std::numeric_limits<double>::infinity();
     for (int form = 0; form < 4; ++form) {
       const bool second = form >= 2;
@@ -499,14 +578,11 @@ class Diagnosis {
       if (v + penalty_ * dof < best_score) {
         best_score = v + penalty_ * dof;
         const double fc = std::exp(lfc);
-        best = Trial{a,
-                     {"sensor_dynamics", 0, 0, dof, 1,
-                      {{"cutoff_hz", fc / s_.Ts}, {"order", second ? 2.0 : 1.0}, {"discrete", form % 2 == 0 ? 1.0 : 0.0}}},
+        best = Trial{a, {0, 0, dof, 1, SensorDynamics{fc / s_.Ts, second ? 2 : 1, form % 2 == 0, second ? zeta : 0.0}},
                      v};
-        if (second) best.fit.parameters["damping"] = zeta;
         Eigen::VectorXcd m(a.base.size());
         for (Eigen::Index k = 0; k < m.size(); ++k) m(k) = lowpass(form, s_.cycles(k), fc, zeta);
-        best.state.mult["sensor_dynamics"] = m;
+        best.state.mult[Effect::SensorDynamics] = m;
       }
     }
     return best;
@@ -537,17 +613,16 @@ class Diagnosis {
     theta = std::abs(s.imag());
     sigma = -s.real();
   }
-  void report_mode(EffectFit& f, cplx lambda) const {
+  Resonance resonance(cplx lambda) const {
     double th, sg;
     theta_sigma(lambda, th, sg);
     const double wn = std::hypot(th, sg);
-    f.parameters["frequency_hz"] = wn / (2 * M_PI) / (model_.domain == Domain::Discrete ? s_.Ts : 1.0);
-    f.parameters["damping"] = sg / wn;
+    return {wn / (2 * M_PI) / (model_.domain == Domain::Discrete ? s_.Ts : 1.0), sg / wn};
   }
 
   // Variable projection over the pole (θ, ln σ): the residue (and d) by weighted
   // least squares for each pole. R ≈ X · mode.
-  Trial fit_pole(const Augment& a, const std::string& name, const Eigen::VectorXcd& X, const Eigen::VectorXcd& R,
+  Trial fit_pole(const Augment& a, Effect effect, const Eigen::VectorXcd& X, const Eigen::VectorXcd& R,
                  bool with_d, const std::vector<cplx>& starts, bool grid,
                  const std::function<void(Augment&, cplx, const Eigen::VectorXd&)>& apply) const {
     const Weighted W = weighted(s_, a);
@@ -596,7 +671,13 @@ class Diagnosis {
       if (std::isfinite(jbest)) x0.push_back(gbest);
     }
     const int dof = with_d ? 5 : 4;
-    Trial best{a, {name, 0, 0, dof, 1, {}}, std::numeric_limits<double>::infinity()};
+    // The fitted resonance goes into the effect's parameters (mode_mismatch
+    // or unmodelled_mode); absent when no start gives a finite fit.
+    const auto parameters = [effect](std::optional<Resonance> r) -> EffectParameters {
+      if (effect == Effect::ModeMismatch) return ModeMismatch{r, std::nullopt};
+      return UnmodelledMode{r, false};
+    };
+    Trial best{a, {0, 0, dof, 1, parameters(std::nullopt)}, std::numeric_limits<double>::infinity()};
     for (const Eigen::Vector2d& st : x0) {
       const Eigen::Vector2d v = nelder_mead(J, st, Eigen::Vector2d(0.02 * st(0), 0.3));
       const double j = J(v);
@@ -604,9 +685,8 @@ class Diagnosis {
       const cplx lambda = mode_pole(model_.domain, v(0), std::exp(v(1)));
       best.V = j;
       best.state = a;
-      best.fit = EffectFit{name, 0, 0, dof, 1, {}};
+      best.fit = EffectFit{0, 0, dof, 1, parameters(resonance(lambda))};
       apply(best.state, lambda, c);
-      report_mode(best.fit, lambda);
     }
     if (!std::isfinite(best.V)) best.V = cost(s_, W, a.G());  // nothing to refine: the state unchanged
     return best;
@@ -645,12 +725,12 @@ class Diagnosis {
     } catch (const Error&) {
       // the subspace start is optional; the grid still runs
     }
-    Trial par = fit_pole(a, "unmodelled_mode", Xp, Rp, true, starts, true,
-                         [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.add["unmodelled_mode"] = mode_response(l, c); });
-    Trial ser = fit_pole(a, "unmodelled_mode", Xs, Rs, true, starts, true,
-                         [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.mult["unmodelled_mode"] = mode_response(l, c); });
-    par.fit.parameters["series"] = 0;
-    ser.fit.parameters["series"] = 1;
+    Trial par = fit_pole(a, Effect::UnmodelledMode, Xp, Rp, true, starts, true,
+                         [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.add[Effect::UnmodelledMode] = mode_response(l, c); });
+    Trial ser = fit_pole(a, Effect::UnmodelledMode, Xs, Rs, true, starts, true,
+                         [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.mult[Effect::UnmodelledMode] = mode_response(l, c); });
+    std::get<UnmodelledMode>(par.fit.parameters).series = false;
+    std::get<UnmodelledMode>(ser.fit.parameters).series = true;
     return ser.V < par.V ? ser : par;
   }
 
@@ -658,7 +738,7 @@ class Diagnosis {
   // replaced by a refitted pole and residue (4 parameters).
   Trial fit_mismatch(const Augment& a) const {
     const Weighted W = weighted(s_, a);
-    Trial best{a, {"mode_mismatch", 0, 0, 4, 1, {}}, cost(s_, W, a.G())};
+    Trial best{a, {0, 0, 4, 1, ModeMismatch{}}, cost(s_, W, a.G())};
     if (model_.order() == 0) return best;
     Eigen::EigenSolver<Eigen::MatrixXd> es(model_.A);
     const Eigen::MatrixXcd V = es.eigenvectors();
@@ -677,22 +757,22 @@ class Diagnosis {
       for (Eigen::Index k = 0; k < old.size(); ++k)
         old(k) = r / (s_.xi(k) - l) + std::conj(r) / (s_.xi(k) - std::conj(l));
       Augment w = a;
-      w.add["mode_mismatch"] = -old;
+      w.add[Effect::ModeMismatch] = -old;
       const Eigen::VectorXcd G = w.G();
       Eigen::VectorXcd X(K), R(K);
       for (int j = 0; j < K; ++j) {
         X(j) = mult(s_.exc[j]) * W.U(j);
         R(j) = W.T(j) - G(s_.exc[j]) * W.U(j);
       }
-      Trial t = fit_pole(w, "mode_mismatch", X, R, false, {l}, false,
+      Trial t = fit_pole(w, Effect::ModeMismatch, X, R, false, {l}, false,
                          [this, old](Augment& s, cplx lambda, const Eigen::VectorXd& c) {
-                           s.add["mode_mismatch"] = mode_response(lambda, c) - old;
+                           s.add[Effect::ModeMismatch] = mode_response(lambda, c) - old;
                          });
       if (!any || t.V < best.V) {
         any = true;
         double th, sg;
         theta_sigma(l, th, sg);
-        t.fit.parameters["model_frequency_hz"] =
+        std::get<ModeMismatch>(t.fit.parameters).model_frequency_hz =
             std::hypot(th, sg) / (2 * M_PI) / (model_.domain == Domain::Discrete ? s_.Ts : 1.0);
         best = t;
       }
@@ -712,7 +792,7 @@ class Diagnosis {
     std::vector<int> lines = s_.exc;
     lines.insert(lines.end(), s_.ne.begin(), s_.ne.end());
     const LineStats st = line_stats(s_, a, lines);
-    Trial best{a, {"nonlinearity", 0, 0, 2, 1, {}}, std::numeric_limits<double>::infinity()};
+    Trial best{a, {0, 0, 2, 1, Nonlinearity{}}, std::numeric_limits<double>::infinity()};
     for (int where = 0; where < 2; ++where) {  // 0 output, 1 input
       std::array<Eigen::MatrixXcd, 2> Q = {Eigen::MatrixXcd::Zero(s_.M, L), Eigen::MatrixXcd::Zero(s_.M, L)};
       double scale = 0;
@@ -738,9 +818,8 @@ class Diagnosis {
       w = pooled(w).cwiseInverse() * st.M;  // excited then unexcited lines: pooled within each run
       Eigen::VectorXd c;
       weighted_ls(Phi, st.mean, w, c);
-      Trial t{a, {"nonlinearity", 0, 0, 2, 1, {}}, 0};
       const double a2 = c(0) / std::pow(scale, 2), a3 = c(1) / std::pow(scale, 3);
-      t.fit.parameters = {{"a2", a2}, {"a3", a3}, {"at_input", static_cast<double>(where)}};
+      Trial t{a, {0, 0, 2, 1, Nonlinearity{true, a2, a3, where == 1}}, 0};
       t.state.nl = a2 * Q[0] + a3 * Q[1];
       t.V = line_stats(s_, t.state, s_.exc).pooled_cost;
       if (t.V < best.V) best = t;
@@ -977,7 +1056,7 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
 
   // Every effect alone on the model as given.
   const double V0 = st0.pooled_cost;
-  for (const char* e : kLinearEffects) {
+  for (Effect e : kLinearEffects) {
     Trial t = dg.fit(e, a0);
     t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
     t.fit.p_value = dg.f_test(V0, line_stats(s, t.state, s.exc).pooled_cost, t.fit.dof, t.fit.dof);
@@ -999,8 +1078,7 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
   {
     Augment a = a0;
     a.first = std::max(drop, 1);
-    EffectFit f{"leakage", gap_of(line_stats(s, a, s.exc)), 0, 0, rep.p_leakage,
-                {{"transient_periods", static_cast<double>(a.first)}}};
+    EffectFit f{gap_of(line_stats(s, a, s.exc)), 0, 0, rep.p_leakage, Leakage{a.first}};
     rep.candidates.push_back(f);
   }
   for (EffectFit& f : rep.candidates) f.shrink = 1.0 - f.gap_after / rep.gap_before;
@@ -1018,8 +1096,8 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
   };
   if (drop > 0) {
     cur.first = drop;
-    rep.chosen.push_back({"leakage", 0, 0, 0, rep.p_leakage, {{"transient_periods", static_cast<double>(drop)}}});
-    add_step(rep.steps.back().first, "leakage", cur);
+    rep.chosen.push_back({0, 0, 0, rep.p_leakage, Leakage{drop}});
+    add_step(rep.steps.back().first, to_string(Effect::Leakage), cur);
   }
   bool nonlinear = false;
   if (s.ne.size() >= 4) {
@@ -1030,7 +1108,7 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
       t.fit.p_value = p;
       cur = t.state;
       rep.chosen.push_back(t.fit);
-      add_step(rep.steps.back().first, "nonlinearity", cur);
+      add_step(rep.steps.back().first, to_string(Effect::Nonlinearity), cur);
     }
   }
   {
@@ -1045,14 +1123,14 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
       if (nonlinear) a.nl = dg.fit_nonlinearity(a).state.nl;
     };
     struct Choice {
-      std::vector<std::string> set;
+      std::vector<Effect> set;
       Augment state;
       std::vector<EffectFit> fits;
       double V = std::numeric_limits<double>::infinity();
       int q = 0;
       double score() const { return V; }
     };
-    auto evaluate = [&](const std::vector<std::string>& set) {
+    auto evaluate = [&](const std::vector<Effect>& set) {
       Choice c;
       c.set = set;
       std::tie(c.state, c.fits) = dg.fit_set(set, cur, c.V);
@@ -1063,8 +1141,8 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
     };
     auto bic = [&](const Choice& c) { return c.V + dg.penalty() * c.q; };
     Choice best1;
-    std::map<std::string, Choice> singles;
-    for (const char* e : kLinearEffects) {
+    std::map<Effect, Choice> singles;
+    for (Effect e : kLinearEffects) {
       Choice c = evaluate({e});
       singles[e] = c;
       if (bic(c) < bic(best1)) best1 = c;
@@ -1108,7 +1186,7 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
       const std::string base = rep.steps.back().first;
       for (const Choice& c : accepted) {
         std::string what;
-        for (const std::string& e : c.set) what += (what.empty() ? "" : " + ") + e;
+        for (Effect e : c.set) what += (what.empty() ? "" : " + ") + std::string(to_string(e));
         add_step(base, what, c.state);
       }
     }
@@ -1121,11 +1199,13 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
     f.shrink = 1.0 - f.gap_after / rep.gap_before;
   }
   // "present", largest first: by the shrink of the effect alone.
-  std::vector<std::pair<double, std::string>> order;
+  std::vector<std::pair<double, Effect>> order;
   for (const EffectFit& f : rep.chosen)
     for (const EffectFit& c : rep.candidates)
-      if (c.effect == f.effect) order.emplace_back(-c.shrink, f.effect);
-  std::stable_sort(order.begin(), order.end());
+      if (c.effect() == f.effect()) order.emplace_back(-c.shrink, f.effect());
+  std::stable_sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
+    return a.first < b.first || (!(b.first < a.first) && ByName()(a.second, b.second));
+  });
   for (const auto& o : order) rep.present.push_back(o.second);
   if (rep.present.empty()) {
     rep.gap_after = rep.gap_before;
@@ -1143,14 +1223,15 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
 nlohmann::json gap_report_to_json(const GapReport& r) {
   auto fit_json = [](const EffectFit& f) {
     nlohmann::json p = nlohmann::json::object();
-    for (const auto& kv : f.parameters) p[kv.first] = kv.second;
-    return nlohmann::json{{"effect", f.effect}, {"gap_after", f.gap_after}, {"shrink", f.shrink},
+    for (const auto& kv : parameter_list(f.parameters)) p[kv.first] = kv.second;
+    return nlohmann::json{{"effect", to_string(f.effect())}, {"gap_after", f.gap_after}, {"shrink", f.shrink},
                           {"parameters", p},     {"dof", f.dof},            {"p_value", f.p_value}};
   };
   nlohmann::json j;
   j["gap_before"] = r.gap_before;
   j["gap_after"] = r.gap_after;
-  j["present"] = r.present;
+  j["present"] = nlohmann::json::array();
+  for (Effect e : r.present) j["present"].push_back(to_string(e));
   j["bands"] = nlohmann::json::array();
   for (const auto& b : r.bands) j["bands"].push_back({b[0], b[1]});
   j["candidates"] = nlohmann::json::array();

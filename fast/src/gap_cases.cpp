@@ -23,12 +23,6 @@ const char* to_string(Strength s) {
   return "?";
 }
 
-const std::vector<std::string>& gap_effect_names() {
-  static const std::vector<std::string> names = {"gain_error",    "delay",        "sensor_dynamics", "unmodelled_mode",
-                                                 "mode_mismatch", "nonlinearity", "leakage"};
-  return names;
-}
-
 std::array<double, 2> gap_ratio_range(Strength s) {
   switch (s) {
     case Strength::Subtle: return {0.5, 3.0};
@@ -215,11 +209,8 @@ class Fft {
 // ---------------------------------------------------------------------------
 // Effects: parameters drawn at magnitude 1, scaled by `scale` ∈ [0, scale_max]
 // (scale 0 is always the identity).
-enum class Kind { Gain, Delay, Sensor, Unmodelled, Mismatch, Nonlinear, Leakage };
-
-struct Effect {
-  std::string name;
-  Kind kind = Kind::Gain;
+struct Injected {
+  Effect effect = Effect::GainError;
   double scale = 1, scale_max = 1, target = 0, ratio = 0;
   double gain0 = 1;                                    // gain_error: g = 1 + s (g0 − 1)
   double delay0 = 0;                                   // delay: τ = s τ0
@@ -235,18 +226,6 @@ struct Effect {
   std::vector<int> lines;                              // the lines the ratio is taken over
   std::vector<double> line_ratio;                      // per line, at the final scale
 };
-
-Kind kind_of(const std::string& name) {
-  static const std::pair<const char*, Kind> table[] = {
-      {"gain_error", Kind::Gain},       {"delay", Kind::Delay},           {"sensor_dynamics", Kind::Sensor},
-      {"unmodelled_mode", Kind::Unmodelled}, {"mode_mismatch", Kind::Mismatch}, {"nonlinearity", Kind::Nonlinear},
-      {"leakage", Kind::Leakage}};
-  for (const auto& [n, k] : table)
-    if (name == n) return k;
-  std::string list;
-  for (const auto& n : gap_effect_names()) list += (list.empty() ? "" : ", ") + n;
-  throw Error(ErrorKind::Input, kWhere, "unknown effect '" + name + "' (known: " + list + ")");
-}
 
 /// The true system: u → f_in → plant → f_out → sensor → gain → delay.
 struct Chain {
@@ -287,16 +266,16 @@ struct Chain {
 
 double poly(double x, double a2, double a3, double r) { return x + a2 * x * x / r + a3 * x * x * x / (r * r); }
 
-Chain make_chain(const Base& base, const std::vector<const Effect*>& effects) {
+Chain make_chain(const Base& base, const std::vector<const Injected*>& effects) {
   std::vector<Mode> modes = base.modes;
   Chain c;
   c.D = base.D;
-  for (const Effect* e : effects) {
+  for (const Injected* e : effects) {
     const double s = e->scale;
-    switch (e->kind) {
-      case Kind::Gain: c.gain *= 1 + s * (e->gain0 - 1); break;
-      case Kind::Delay: c.delay += s * e->delay0; break;
-      case Kind::Sensor: {
+    switch (e->effect) {
+      case Effect::GainError: c.gain *= 1 + s * (e->gain0 - 1); break;
+      case Effect::Delay: c.delay += s * e->delay0; break;
+      case Effect::SensorDynamics: {
         const double T = s * e->time_constant0;
         if (T <= 0) break;
         const double wc = 1 / T;
@@ -314,7 +293,7 @@ Chain make_chain(const Base& base, const std::vector<const Effect*>& effects) {
         c.sensor.push_back(sec);
         break;
       }
-      case Kind::Unmodelled:
+      case Effect::UnmodelledMode:
         if (e->series) {
           const cplx p = resonance_pole(e->extra_omega, e->extra_zeta);
           const cplx z = resonance_pole(e->extra_omega, e->extra_zeta * (1 + s * e->kappa0));
@@ -333,11 +312,11 @@ Chain make_chain(const Base& base, const std::vector<const Effect*>& effects) {
           c.parallel.push_back(m.section());
         }
         break;
-      case Kind::Mismatch:
+      case Effect::ModeMismatch:
         modes[static_cast<std::size_t>(e->mode)].omega *= 1 + s * e->shift0;
         modes[static_cast<std::size_t>(e->mode)].zeta *= std::exp(s * e->damping_log0);
         break;
-      case Kind::Nonlinear:
+      case Effect::Nonlinearity:
         if (e->at_input) {
           c.in_nl = true;
           c.in_a2 = s * e->quad0;
@@ -350,7 +329,7 @@ Chain make_chain(const Base& base, const std::vector<const Effect*>& effects) {
           c.out_r = e->reference_rms;
         }
         break;
-      case Kind::Leakage: c.leak = s; break;
+      case Effect::Leakage: c.leak = s; break;
     }
   }
   for (const Mode& m : modes) c.parallel.push_back(m.section());
@@ -460,12 +439,12 @@ class Calibrator {
  public:
   Calibrator(const Base& base, const Setting& st, Fft& fft) : base_(base), st_(st), fft_(fft) {}
 
-  double deviation(const Effect& e, double s, std::vector<double>* per_line = nullptr) {
-    Effect es = e;
+  double deviation(const Injected& e, double s, std::vector<double>* per_line = nullptr) {
+    Injected es = e;
     es.scale = s;
     std::vector<double> r;
-    switch (e.kind) {
-      case Kind::Nonlinear: {
+    switch (e.effect) {
+      case Effect::Nonlinearity: {
         std::vector<double> x = e.at_input ? st_.u : st_.y_sim;
         const double a2 = s * e.quad0, a3 = s * e.cubic0;
         for (double& v : x) v = poly(v, a2, a3, e.reference_rms);
@@ -477,7 +456,7 @@ class Calibrator {
         }
         break;
       }
-      case Kind::Leakage: {
+      case Effect::Leakage: {
         if (T1_.empty()) {
           const Chain c = make_chain(base_, {});
           const std::vector<double> tr = transient(c, st_, st_.y_sim, 1);
@@ -501,8 +480,8 @@ class Calibrator {
     return A;
   }
 
-  const std::vector<int>& lines(const Effect& e) const {
-    return e.kind == Kind::Nonlinear ? st_.unexcited_band : e.kind == Kind::Leakage ? st_.band : st_.excited;
+  const std::vector<int>& lines(const Injected& e) const {
+    return e.effect == Effect::Nonlinearity ? st_.unexcited_band : e.effect == Effect::Leakage ? st_.band : st_.excited;
   }
 
  private:
@@ -592,18 +571,18 @@ Base draw_system(Draw& d, double w_lo, double w_hi) {
   return b;
 }
 
-void draw_effect(Effect& e, Draw& d, Strength strength, const Base& base, const Setting& st, double w_lo,
+void draw_effect(Injected& e, Draw& d, Strength strength, const Base& base, const Setting& st, double w_lo,
                  double w_band) {
   const bool clear = strength == Strength::Clear;
-  switch (e.kind) {
-    case Kind::Gain: {
+  switch (e.effect) {
+    case Effect::GainError: {
       const bool up = d.coin();
       const double dev = clear ? (up ? d.uniform(0.05, 0.4) : d.uniform(0.05, 0.3)) : d.uniform(0.005, 0.03);
       e.gain0 = up ? 1 + dev : 1 - dev;
       e.scale_max = up ? 2.0 / dev : 0.8 / dev;  // g ∈ [0.2, 3]
       break;
     }
-    case Kind::Delay: {
+    case Effect::Delay: {
       const double phase = clear ? d.uniform(0.15, 1.0) : d.uniform(0.02, 0.15);  // at the band edge
       e.delay0 = phase / w_band;
       if (clear && d.coin() && std::round(e.delay0) >= 1 && std::round(e.delay0) * w_band <= 3.0)
@@ -611,7 +590,7 @@ void draw_effect(Effect& e, Draw& d, Strength strength, const Base& base, const 
       e.scale_max = (3.0 / w_band) / e.delay0;
       break;
     }
-    case Kind::Sensor: {
+    case Effect::SensorDynamics: {
       const double fc_rel = clear ? d.log_uniform(0.5, 2.0) : d.log_uniform(3.0, 8.0);
       e.order = d.coin() ? 1 : 2;
       e.sensor_zeta = d.uniform(0.5, 0.9);
@@ -619,7 +598,7 @@ void draw_effect(Effect& e, Draw& d, Strength strength, const Base& base, const 
       e.scale_max = (4.0 / w_band) / e.time_constant0;  // cut-off down to a quarter of the band edge
       break;
     }
-    case Kind::Unmodelled: {
+    case Effect::UnmodelledMode: {
       const double l0 = std::log(std::max(w_lo, kTwoPi * 2 / st.P)), l1 = std::log(0.95 * w_band);
       double best = 0, best_sep = -1;
       for (int tries = 0; tries < 200; ++tries) {
@@ -649,7 +628,7 @@ void draw_effect(Effect& e, Draw& d, Strength strength, const Base& base, const 
       }
       break;
     }
-    case Kind::Mismatch: {
+    case Effect::ModeMismatch: {
       e.mode = d.integer(0, static_cast<int>(base.modes.size()) - 1);
       const Mode& m = base.modes[static_cast<std::size_t>(e.mode)];
       const double u = d.unit();
@@ -665,7 +644,7 @@ void draw_effect(Effect& e, Draw& d, Strength strength, const Base& base, const 
       e.scale_max = std::max(1.0, smax);
       break;
     }
-    case Kind::Nonlinear: {
+    case Effect::Nonlinearity: {
       e.at_input = d.coin();
       const double u = d.unit();
       const int type = u < 1.0 / 3 ? 0 : u < 2.0 / 3 ? 1 : 2;  // quadratic, cubic, both
@@ -679,24 +658,24 @@ void draw_effect(Effect& e, Draw& d, Strength strength, const Base& base, const 
       e.scale_max = 0.5 / std::max(std::abs(e.quad0), std::abs(e.cubic0));
       break;
     }
-    case Kind::Leakage:
+    case Effect::Leakage:
       e.scale_max = 1.0;  // 1: from rest
       break;
   }
 }
 
-json effect_json(const Effect& e, const Base& base) {
+json effect_json(const Injected& e, const Base& base) {
   const double s = e.scale;
   json j;
-  switch (e.kind) {
-    case Kind::Gain: j["gain"] = 1 + s * (e.gain0 - 1); break;
-    case Kind::Delay: j["samples"] = s * e.delay0; break;
-    case Kind::Sensor:
+  switch (e.effect) {
+    case Effect::GainError: j["gain"] = 1 + s * (e.gain0 - 1); break;
+    case Effect::Delay: j["samples"] = s * e.delay0; break;
+    case Effect::SensorDynamics:
       j["order"] = e.order;
       j["cutoff"] = 1.0 / (kTwoPi * s * e.time_constant0);  // cycles/sample
       if (e.order == 2) j["damping"] = e.sensor_zeta;
       break;
-    case Kind::Unmodelled:
+    case Effect::UnmodelledMode:
       j["connection"] = e.series ? "series" : "parallel";
       j["frequency"] = e.extra_omega / kTwoPi;
       j["damping"] = e.extra_zeta;
@@ -706,7 +685,7 @@ json effect_json(const Effect& e, const Base& base) {
         j["residue"] = {(s * e.extra_residue0).real(), (s * e.extra_residue0).imag()};
       }
       break;
-    case Kind::Mismatch: {
+    case Effect::ModeMismatch: {
       const Mode& m = base.modes[static_cast<std::size_t>(e.mode)];
       j["mode"] = e.mode;
       j["frequency_sim"] = m.omega / kTwoPi;
@@ -717,14 +696,14 @@ json effect_json(const Effect& e, const Base& base) {
       j["damping_ratio"] = std::exp(s * e.damping_log0);
       break;
     }
-    case Kind::Nonlinear:
+    case Effect::Nonlinearity:
       j["location"] = e.at_input ? "input" : "output";
       j["quadratic"] = s * e.quad0;
       j["cubic"] = s * e.cubic0;
       j["reference_rms"] = e.reference_rms;
       j["form"] = "x + quadratic x^2/r + cubic x^3/r^2";
       break;
-    case Kind::Leakage:
+    case Effect::Leakage:
       j["initial_state"] = s == 1.0 ? "rest" : "partly settled";
       j["transient_fraction"] = s;  // x(0) = (1 − s) x_ss(0)
       break;
@@ -733,7 +712,7 @@ json effect_json(const Effect& e, const Base& base) {
   j["target_ratio"] = e.target;
   j["scale"] = s;
   j["scale_max"] = e.scale_max;
-  j["lines"] = e.kind == Kind::Nonlinear ? "unexcited" : e.kind == Kind::Leakage ? "band (first period)" : "excited";
+  j["lines"] = e.effect == Effect::Nonlinearity ? "unexcited" : e.effect == Effect::Leakage ? "band (first period)" : "excited";
   return j;
 }
 
@@ -745,11 +724,9 @@ void validate_options(const GapCaseOptions& o) {
   if (static_cast<double>(o.period) * o.periods > static_cast<double>(1 << 26))
     fail("P*M = " + std::to_string(static_cast<double>(o.period) * o.periods) + " samples exceeds 2^26");
   if (o.effects.size() > 2) fail("at most 2 effects, got " + std::to_string(o.effects.size()));
-  std::set<std::string> seen;
-  for (const auto& n : o.effects) {
-    kind_of(n);
-    if (!seen.insert(n).second) fail("effect '" + n + "' given twice");
-  }
+  std::set<Effect> seen;
+  for (Effect e : o.effects)
+    if (!seen.insert(e).second) fail("effect '" + std::string(to_string(e)) + "' given twice");
   if (!o.effects.empty() && o.strength == Strength::None) fail("effects need strength subtle or clear, not none");
 }
 
@@ -834,11 +811,10 @@ GapCase make_gap_case(const GapCaseOptions& o) {
   signal /= F;
 
   // Effects: draw, then calibrate noise level and magnitudes.
-  std::vector<Effect> effects;
-  for (const auto& n : o.effects) {
-    Effect e;
-    e.name = n;
-    e.kind = kind_of(n);
+  std::vector<Injected> effects;
+  for (Effect effect : o.effects) {
+    Injected e;
+    e.effect = effect;
     draw_effect(e, d, o.strength, base, st, w_lo, w_band);
     const auto range = gap_ratio_range(o.strength);
     e.target = d.log_uniform(range[0], range[1]);
@@ -851,14 +827,14 @@ GapCase make_gap_case(const GapCaseOptions& o) {
     nu = signal / std::pow(10.0, d.uniform(2, 6));
   } else {
     double lsum = 0;
-    for (Effect& e : effects) lsum += std::log(cal.deviation(e, 1.0) / e.target);
+    for (Injected& e : effects) lsum += std::log(cal.deviation(e, 1.0) / e.target);
     nu = std::clamp(std::exp(lsum / static_cast<double>(effects.size())), nu_lo, nu_hi);
     // The bracket [0, hi] of each effect's magnitude: hi = 1 (the draw) when it
     // reaches the target, else the first of a grid over (1, scale_max] that
     // does (the deviation need not grow monotonically, e.g. a mode moving
     // across the lines); when none does, the noise is lowered (past 60 dB: snr_clamped).
     std::vector<double> hi_of;
-    for (Effect& e : effects) {
+    for (Injected& e : effects) {
       double hi = std::min(1.0, e.scale_max), best = hi, Abest = cal.deviation(e, hi);
       if (Abest < e.target * nu) {
         for (int i = 1; i <= 32; ++i) {
@@ -869,7 +845,7 @@ GapCase make_gap_case(const GapCaseOptions& o) {
           }
           if (A >= e.target * nu) break;
         }
-        if (!(Abest > 0)) throw Error(ErrorKind::Numerical, kWhere, "effect " + e.name + " makes no deviation");
+        if (!(Abest > 0)) throw Error(ErrorKind::Numerical, kWhere, "effect " + std::string(to_string(e.effect)) + " makes no deviation");
         if (Abest < e.target * nu * (1 - 1e-9)) {
           nu = Abest / e.target;
         }
@@ -878,7 +854,7 @@ GapCase make_gap_case(const GapCaseOptions& o) {
       hi_of.push_back(hi);
     }
     for (std::size_t j = 0; j < effects.size(); ++j) {
-      Effect& e = effects[j];
+      Injected& e = effects[j];
       double s = 1.0;
       double A = cal.deviation(e, s);
       if (!(e.scale_max >= 1.0 && std::abs(A / nu / e.target - 1) <= 1e-9)) {
@@ -901,8 +877,8 @@ GapCase make_gap_case(const GapCaseOptions& o) {
   const bool clamped = nu < nu_lo * (1 - 1e-9);  // the SNR had to exceed 60 dB
 
   // The true system's record.
-  std::vector<const Effect*> ptrs;
-  for (const Effect& e : effects) ptrs.push_back(&e);
+  std::vector<const Injected*> ptrs;
+  for (const Injected& e : effects) ptrs.push_back(&e);
   const Chain truth_chain = make_chain(base, ptrs);
   const std::vector<cplx> Y = steady(truth_chain, st, fft, true);
   const std::vector<double> y_ss = fft.inverse(Y);
@@ -958,12 +934,12 @@ GapCase make_gap_case(const GapCaseOptions& o) {
 
   json details = json::object();
   std::vector<std::array<double, 2>> all_bands;
-  for (const Effect& e : effects) {
+  for (const Injected& e : effects) {
     json j = effect_json(e, base);
     const auto b = bands_of(e.lines, e.line_ratio, P);
     j["bands"] = bands_json(b);
     all_bands.insert(all_bands.end(), b.begin(), b.end());
-    details[e.name] = j;
+    details[to_string(e.effect)] = j;
   }
   out.bands = merge_bands(all_bands);
 
@@ -974,7 +950,8 @@ GapCase make_gap_case(const GapCaseOptions& o) {
                      {"damped_frequency", std::arg(m.pole()) / kTwoPi},
                      {"residue", {m.residue.real(), m.residue.imag()}}});
   json& t = out.truth;
-  t["effects"] = o.effects;
+  t["effects"] = json::array();
+  for (Effect e : o.effects) t["effects"].push_back(to_string(e));
   t["strength"] = effects.empty() ? "none" : to_string(o.strength);
   t["seed"] = o.seed;
   t["period"] = P;
