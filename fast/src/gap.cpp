@@ -217,6 +217,34 @@ Eigen::VectorXd pooled(const Eigen::VectorXd& v) {
   return p;
 }
 
+// The periods first … last (inclusive), in order.
+std::vector<int> period_range(int first, int last) {
+  std::vector<int> p;
+  for (int l = first; l <= last; ++l) p.push_back(l);
+  return p;
+}
+
+// Pintelon (2002) Eq. 25 at one line: the sample mean Ē(k) and the sample
+// variance s²(k) (divisor R − 1) over the R periods `periods` of the residual
+// E_l(k) = Y_l(k) − G(k) U_l(k) − N_l(k), N the per-period nonlinear term
+// (none when `nl` is empty). `e` is scratch of size R. The one place the
+// per-period residual statistics are formed (line_stats, the period deviation
+// tests).
+struct Moments {
+  cplx mean;
+  double var;
+};
+Moments residual_moments(const Spectra& s, const Eigen::VectorXcd& G, const Eigen::MatrixXcd& nl, int k,
+                         const std::vector<int>& periods, Eigen::VectorXcd& e) {
+  const int R = static_cast<int>(periods.size());
+  for (int q = 0; q < R; ++q) {
+    const int p = periods[q];
+    e(q) = s.Y(p, k) - G(k) * s.U(p, k) - (nl.size() ? nl(p, k) : cplx(0));
+  }
+  const cplx m = e.mean();
+  return {m, (e.array() - m).abs2().sum() / (R - 1)};
+}
+
 // t(k) over the line indices `idx` for the augmented model.
 LineStats line_stats(const Spectra& s, const Augment& a, const std::vector<int>& idx) {
   const int M = s.M - a.first;
@@ -226,18 +254,13 @@ LineStats line_stats(const Spectra& s, const Augment& a, const std::vector<int>&
   st.var.resize(idx.size());
   st.mean.resize(idx.size());
   const Eigen::VectorXcd G = a.G();
+  const std::vector<int> periods = period_range(a.first, s.M - 1);
   Eigen::VectorXcd e(M);
   for (size_t i = 0; i < idx.size(); ++i) {
-    const int k = idx[i];
-    for (int l = 0; l < M; ++l) {
-      const int p = a.first + l;
-      e(l) = s.Y(p, k) - G(k) * s.U(p, k) - (a.nl.size() ? a.nl(p, k) : cplx(0));
-    }
-    const cplx m = e.mean();
-    const double v = (e.array() - m).abs2().sum() / (M - 1);
-    st.mean(i) = m;
-    st.var(i) = v;
-    st.t(i) = M * std::norm(m) / v;
+    const Moments mo = residual_moments(s, G, a.nl, idx[i], periods, e);
+    st.mean(i) = mo.mean;
+    st.var(i) = mo.var;
+    st.t(i) = M * std::norm(mo.mean) / mo.var;
   }
   const Eigen::VectorXd pv = pooled(st.var);
   for (size_t i = 0; i < idx.size(); ++i) st.pooled_cost += M * std::norm(st.mean(i)) / pv(i);
@@ -259,15 +282,14 @@ double fisher_p(const Eigen::VectorXd& t, int M) {
 double period_deviation_p(const Spectra& s, const Augment& a, int l) {
   const int R = s.M - l - 1;  // periods after l
   const Eigen::VectorXcd G = a.G();
+  const std::vector<int> later = period_range(l + 1, s.M - 1);
   Eigen::VectorXd t(s.all.size());
   Eigen::VectorXcd e(R);
   for (size_t i = 0; i < s.all.size(); ++i) {
     const int k = s.all[i];
-    for (int q = 0; q < R; ++q) e(q) = s.Y(l + 1 + q, k) - G(k) * s.U(l + 1 + q, k);
-    const cplx m = e.mean();
-    const double v = (e.array() - m).abs2().sum() / (R - 1);
-    const cplx d = s.Y(l, k) - G(k) * s.U(l, k) - m;
-    t(i) = std::norm(d) / (v * (1.0 + 1.0 / R));  // ~ F(2, 2R − 2)
+    const Moments mo = residual_moments(s, G, Eigen::MatrixXcd(), k, later, e);
+    const cplx d = s.Y(l, k) - G(k) * s.U(l, k) - mo.mean;
+    t(i) = std::norm(d) / (mo.var * (1.0 + 1.0 / R));  // ~ F(2, 2R − 2)
   }
   return fisher_p(t, R);  // the same combination with M − 1 → R − 1
 }
@@ -865,10 +887,9 @@ class Diagnosis {
       Eigen::VectorXd w(Lk);
       for (int i = 0; i < Lk; ++i) {
         const int k = s_.all[i];
-        for (int q = 0; q < R; ++q) e(q) = s_.Y(rest[q], k) - G(k) * s_.U(rest[q], k);
-        const cplx m = e.mean();
-        w(i) = (e.array() - m).abs2().sum() / (R - 1) * (1.0 + 1.0 / R);  // variance of d
-        d(i) = s_.Y(p, k) - G(k) * s_.U(p, k) - m;
+        const Moments mo = residual_moments(s_, G, Eigen::MatrixXcd(), k, rest, e);
+        w(i) = mo.var * (1.0 + 1.0 / R);  // variance of d
+        d(i) = s_.Y(p, k) - G(k) * s_.U(p, k) - mo.mean;
       }
       w = pooled(w).cwiseInverse();
       Eigen::VectorXd c;
@@ -973,10 +994,10 @@ std::vector<bool> benjamini_hochberg(const std::vector<double>& p, double q) {
   return f;
 }
 
-}  // namespace
-
-GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, int inputs, const RecordMeta& meta,
-                       const GapOptions& options) {
+// Input checks of diagnose_gap (see gap.hpp for the conditions).
+// Fails: Error(Input) naming the model, the data, the meta field or the options.
+void check_inputs(const StateSpace& model, const Eigen::MatrixXd& record, int inputs, const RecordMeta& meta,
+                  const GapOptions& options) {
   validate(model);
   if (model.inputs() != 1 || model.outputs() != 1)
     throw Error(ErrorKind::Input, "model", "the gap diagnosis needs a SISO model (1 input, 1 output), got " +
@@ -993,153 +1014,173 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
   if (!(options.alpha > 0 && options.alpha < 1 && options.effect_alpha > 0 && options.effect_alpha < 1 &&
         options.fdr > 0 && options.fdr < 1 && options.min_share >= 0 && options.min_share < 1))
     throw Error(ErrorKind::Input, "options", "levels must lie in (0, 1)");
-  const Spectra s = spectra_of(record, meta, model.domain);
-  if (s.exc.size() < 4)
-    throw Error(ErrorKind::Input, "meta field \"excited_lines\"", "needs at least 4 excited lines below P/2");
-  Diagnosis dg(model, s);
+}
 
-  GapReport rep;
-  rep.options = options;
-  rep.excited = static_cast<int>(s.exc.size());
-  rep.unexcited = static_cast<int>(s.ne.size());
-  const Augment a0 = dg.initial();
-  const LineStats st0 = line_stats(s, a0, s.exc);
-  {
-    // A noise floor must exist: periods identical to rounding give s² ≈ 0.
-    std::vector<double> v(st0.var.data(), st0.var.data() + st0.var.size()), y;
-    for (int k : s.exc) y.push_back(std::norm(s.Y.col(k).mean()));
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    std::nth_element(y.begin(), y.begin() + y.size() / 2, y.end());
-    if (!(v[v.size() / 2] > 1e-24 * y[y.size() / 2]) || !st0.t.allFinite())
-      throw Error(ErrorKind::Input, "data",
-                  "the periods do not vary (sample variance " + std::to_string(v[v.size() / 2]) +
-                      " at the median excited line): no noise floor to measure the gap against; the gap diagnosis "
-                      "needs measured (noisy) periods");
-  }
+// A noise floor must exist: periods identical to rounding give s² ≈ 0.
+// Method: the median over the excited lines of s²(k) against that of |Ȳ(k)|²
+// (relative threshold 1e-24, far below any measured record).
+// Fails: Error(Input) on "data" when s² vanishes or t(k) is not finite.
+void require_noise_floor(const Spectra& s, const LineStats& st0) {
+  std::vector<double> v(st0.var.data(), st0.var.data() + st0.var.size()), y;
+  for (int k : s.exc) y.push_back(std::norm(s.Y.col(k).mean()));
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  std::nth_element(y.begin(), y.begin() + y.size() / 2, y.end());
+  if (!(v[v.size() / 2] > 1e-24 * y[y.size() / 2]) || !st0.t.allFinite())
+    throw Error(ErrorKind::Input, "data",
+                "the periods do not vary (sample variance " + std::to_string(v[v.size() / 2]) +
+                    " at the median excited line): no noise floor to measure the gap against; the gap diagnosis "
+                    "needs measured (noisy) periods");
+}
+
+// The detection tests on the model as given (gap.hpp): the gap and its Fisher
+// combination over the excited lines, the leakage test of the first period,
+// and the nonlinearity test on the unexcited lines inside the band (not
+// testable with fewer than 4 of them: p = 1 and a note).
+void detection_tests(const Diagnosis& dg, const Spectra& s, const Augment& a0, const LineStats& st0, GapReport& rep) {
   rep.gap_before = gap_of(st0);
   rep.p_gap = fisher_p(st0.t, st0.M);
   rep.p_leakage = dg.leakage_p(a0, 0);
   rep.p_nonlinearity = s.ne.size() >= 4 ? fisher_p(line_stats(s, a0, s.ne).t, s.M) : 1.0;
   if (s.ne.size() < 4) rep.notes.push_back("fewer than 4 unexcited lines inside the band: nonlinearity not testable");
+}
 
-  // Bands of the model as given.
-  {
-    std::vector<double> p(s.exc.size());
-    for (size_t i = 0; i < p.size(); ++i) p[i] = f2_survival(st0.t(i), 2 * st0.M - 2);
-    std::vector<bool> flag = benjamini_hochberg(p, options.fdr);
-    if (std::none_of(flag.begin(), flag.end(), [](bool b) { return b; })) {
-      // windows of 8 excited lines, Fisher-combined, then BH over the windows
-      const size_t w = 8;
-      std::vector<double> pw;
-      for (size_t i = 0; i < p.size(); i += w) {
-        const size_t n = std::min(w, p.size() - i);
-        pw.push_back(fisher_p(st0.t.segment(i, n), st0.M));
-      }
-      const std::vector<bool> fw = benjamini_hochberg(pw, options.fdr);
-      for (size_t i = 0; i < p.size(); ++i) flag[i] = fw[i / w];
+// Bands of the model as given: the flags and the bands of rep (gap.hpp).
+// Method: Benjamini–Hochberg at `fdr` over p(k) = P(F(2, 2M−2) > t(k)); when
+// no line is flagged, over windows of 8 excited lines (Fisher-combined)
+// instead. Flagged lines within two excited lines of each other form a band.
+void gap_bands(const Spectra& s, const LineStats& st0, double fdr, GapReport& rep) {
+  std::vector<double> p(s.exc.size());
+  for (size_t i = 0; i < p.size(); ++i) p[i] = f2_survival(st0.t(i), 2 * st0.M - 2);
+  std::vector<bool> flag = benjamini_hochberg(p, fdr);
+  if (std::none_of(flag.begin(), flag.end(), [](bool b) { return b; })) {
+    const size_t w = 8;
+    std::vector<double> pw;
+    for (size_t i = 0; i < p.size(); i += w) {
+      const size_t n = std::min(w, p.size() - i);
+      pw.push_back(fisher_p(st0.t.segment(i, n), st0.M));
     }
-    rep.flagged = flag;
-    for (size_t i = 0; i < flag.size();) {
-      if (!flag[i]) {
-        ++i;
-        continue;
-      }
-      size_t j = i, last = i;
-      while (j < flag.size() && j <= last + 2) {
-        if (flag[j]) last = j;
-        ++j;
-      }
-      rep.bands.push_back({s.hz(s.exc[i]), s.hz(s.exc[last])});
-      i = last + 1;
-    }
+    const std::vector<bool> fw = benjamini_hochberg(pw, fdr);
+    for (size_t i = 0; i < p.size(); ++i) flag[i] = fw[i / w];
   }
+  rep.flagged = flag;
+  for (size_t i = 0; i < flag.size();) {
+    if (!flag[i]) {
+      ++i;
+      continue;
+    }
+    size_t j = i, last = i;
+    while (j < flag.size() && j <= last + 2) {
+      if (flag[j]) last = j;
+      ++j;
+    }
+    rep.bands.push_back({s.hz(s.exc[i]), s.hz(s.exc[last])});
+    i = last + 1;
+  }
+}
 
-  // Every effect alone on the model as given.
-  const double V0 = st0.pooled_cost;
+// Every linear effect and the nonlinearity, each alone on the model as given:
+// gap after, and p-value (the F-test against the pooled cost V0 for a linear
+// effect; the nonlinearity test for the nonlinearity).
+std::vector<EffectFit> fits_alone(const Diagnosis& dg, const Spectra& s, const Augment& a0, double V0,
+                                  double p_nonlinearity) {
+  std::vector<EffectFit> fits;
   for (Effect e : kLinearEffects) {
     Trial t = dg.fit(e, a0);
     t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
     t.fit.p_value = dg.f_test(V0, line_stats(s, t.state, s.exc).pooled_cost, t.fit.dof, t.fit.dof);
-    rep.candidates.push_back(t.fit);
+    fits.push_back(t.fit);
   }
-  {
-    Trial t = dg.fit_nonlinearity(a0);
-    t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
-    t.fit.p_value = rep.p_nonlinearity;
-    rep.candidates.push_back(t.fit);
-  }
-  // Leakage: drop the periods the period-deviation test flags.
-  int drop = 0;
-  for (double p = rep.p_leakage; s.M - drop - 1 >= 4 && p < options.alpha;)  // p = leakage_p(a0, drop)
-    if (s.M - ++drop - 1 >= 4) p = dg.leakage_p(a0, drop);
-  // The transient decays geometrically: the first period the test passes still
-  // carries some of it. One more period goes when at least 4 remain after it.
-  if (drop > 0 && s.M - drop - 1 >= 4) ++drop;
-  {
-    Augment a = a0;
-    a.first = std::max(drop, 1);
-    EffectFit f{gap_of(line_stats(s, a, s.exc)), 0, 0, rep.p_leakage, Leakage{a.first}};
-    rep.candidates.push_back(f);
-  }
-  for (EffectFit& f : rep.candidates) f.shrink = 1.0 - f.gap_after / rep.gap_before;
-  std::stable_sort(rep.candidates.begin(), rep.candidates.end(),
-                   [](const EffectFit& a, const EffectFit& b) { return a.gap_after < b.gap_after; });
+  Trial t = dg.fit_nonlinearity(a0);
+  t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
+  t.fit.p_value = p_nonlinearity;
+  fits.push_back(t.fit);
+  return fits;
+}
 
-  // The chosen set: leakage and nonlinearity by their own tests, then the
-  // linear effects: the best single (BIC) if its F-test and relevance rule
-  // pass, then the best pair (joint fit) if it beats that single likewise.
+// Leakage: how many leading periods carry a transient. Method: drop periods
+// while the period-deviation test (Diagnosis::leakage_p) of the first kept
+// one rejects at `alpha` and at least 4 later periods remain; the transient
+// decays geometrically, so the first period that passes still carries some of
+// it: one more goes when at least 4 remain after it.
+int transient_periods(const Diagnosis& dg, const Spectra& s, const Augment& a0, double p_leakage, double alpha) {
+  int drop = 0;
+  for (double p = p_leakage; s.M - drop - 1 >= 4 && p < alpha;)  // p = leakage_p(a0, drop)
+    if (s.M - ++drop - 1 >= 4) p = dg.leakage_p(a0, drop);
+  if (drop > 0 && s.M - drop - 1 >= 4) ++drop;
+  return drop;
+}
+
+// The leakage candidate: the gap with the transient periods (at least one) left out.
+EffectFit leakage_alone(const Spectra& s, const Augment& a0, int drop, double p_leakage) {
+  Augment a = a0;
+  a.first = std::max(drop, 1);
+  return {gap_of(line_stats(s, a, s.exc)), 0, 0, p_leakage, Leakage{a.first}};
+}
+
+// t(k) after one more stage: labels accumulate ("+ leakage", "+ leakage + nonlinearity", …).
+void add_step(const Spectra& s, const std::string& base, const std::string& what, const Augment& a, GapReport& rep) {
+  rep.steps.emplace_back(base == "model" ? "+ " + what : base + " + " + what, line_stats(s, a, s.exc).t);
+}
+
+// The first stages of the chosen set, each by its own test: leakage (the
+// transient periods dropped) and nonlinearity (fitted when the test on the
+// unexcited lines rejects at alpha with those periods dropped). Returns the
+// state and, through `nonlinear`, whether the nonlinearity was admitted.
+Augment choose_leakage_and_nonlinearity(const Diagnosis& dg, const Spectra& s, const Augment& a0, int drop,
+                                        double alpha, GapReport& rep, bool& nonlinear) {
   Augment cur = a0;
-  rep.steps.emplace_back("model", st0.t);
-  // Stage labels accumulate: "+ leakage", "+ leakage + nonlinearity", ...
-  auto add_step = [&](const std::string& base, const std::string& what, const Augment& a) {
-    rep.steps.emplace_back(base == "model" ? "+ " + what : base + " + " + what, line_stats(s, a, s.exc).t);
-  };
   if (drop > 0) {
     cur.first = drop;
     rep.chosen.push_back({0, 0, 0, rep.p_leakage, Leakage{drop}});
-    add_step(rep.steps.back().first, to_string(Effect::Leakage), cur);
+    add_step(s, rep.steps.back().first, to_string(Effect::Leakage), cur, rep);
   }
-  bool nonlinear = false;
+  nonlinear = false;
   if (s.ne.size() >= 4) {
     const double p = fisher_p(line_stats(s, cur, s.ne).t, s.M - cur.first);
-    if (p < options.alpha) {
+    if (p < alpha) {
       nonlinear = true;
       Trial t = dg.fit_nonlinearity(cur);
       t.fit.p_value = p;
       cur = t.state;
       rep.chosen.push_back(t.fit);
-      add_step(rep.steps.back().first, to_string(Effect::Nonlinearity), cur);
+      add_step(s, rep.steps.back().first, to_string(Effect::Nonlinearity), cur, rep);
     }
   }
-  {
+  return cur;
+}
+
+// A set of linear effects fitted jointly on a state, as the selection weighs it.
+struct Choice {
+  std::vector<Effect> set;
+  Augment state;
+  std::vector<EffectFit> fits;
+  double V = std::numeric_limits<double>::infinity();  // pooled cost after the set
+  int q = 0;                                            // real parameters of the set
+};
+
+// The selection of the linear effects on top of a state `cur` (leakage and
+// nonlinearity already in): the best single effect by BIC V + penalty · q, and
+// the best pair. Nonlinear distortion, when admitted, is refitted after each set.
+class LinearSelection {
+ public:
+  LinearSelection(const Diagnosis& dg, const Spectra& s, const Augment& cur, bool nonlinear, const GapOptions& o)
+      : dg_(dg), s_(s), cur_(cur), nonlinear_(nonlinear), o_(o) {
     const LineStats st = line_stats(s, cur, s.exc);
-    const double Vc = st.pooled_cost, gc = gap_of(st);
+    Vc_ = st.pooled_cost;
+    gc_ = gap_of(st);
     // Relevance floor: 3 standard deviations of the gap under H0,
     // sd = √(var F(2, d)) / mean F(2, d) / √K with d = 2M − 2.
     const double d = 2.0 * st.M - 2, mean_f = d / (d - 2), var_f = d * d * d / ((d - 2) * (d - 2) * (d - 4));
-    const double floor = 3 * std::sqrt(var_f) / mean_f / std::sqrt(static_cast<double>(s.exc.size()));
-    auto relevant = [&](double g_from, double g_to) { return g_from - g_to >= options.min_share * std::max(g_from - 1, floor); };
-    auto refit_nl = [&](Augment& a) {
-      if (nonlinear) a.nl = dg.fit_nonlinearity(a).state.nl;
-    };
-    struct Choice {
-      std::vector<Effect> set;
-      Augment state;
-      std::vector<EffectFit> fits;
-      double V = std::numeric_limits<double>::infinity();
-      int q = 0;
-      double score() const { return V; }
-    };
-    auto evaluate = [&](const std::vector<Effect>& set) {
-      Choice c;
-      c.set = set;
-      std::tie(c.state, c.fits) = dg.fit_set(set, cur, c.V);
-      refit_nl(c.state);
-      c.V = line_stats(s, c.state, s.exc).pooled_cost;
-      for (const EffectFit& f : c.fits) c.q += f.dof;
-      return c;
-    };
-    auto bic = [&](const Choice& c) { return c.V + dg.penalty() * c.q; };
+    floor_ = 3 * std::sqrt(var_f) / mean_f / std::sqrt(static_cast<double>(s.exc.size()));
+  }
+
+  // The accepted sets, in order: none; the single; or the single and then the
+  // pair that replaced it.
+  // Method: the best single (BIC) is admitted when its F-test against the
+  // current state rejects at effect_alpha and it is relevant; then the best
+  // pair (joint fit, BIC) when it beats the single by BIC, its nested F-test
+  // against the better of its own two members rejects, and it is relevant.
+  std::vector<Choice> run() const {
     Choice best1;
     std::map<Effect, Choice> singles;
     for (Effect e : kLinearEffects) {
@@ -1148,49 +1189,95 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
       if (bic(c) < bic(best1)) best1 = c;
     }
     std::vector<Choice> accepted;
-    if (std::isfinite(best1.V)) {
-      const double p1 = dg.f_test(Vc, best1.V, best1.q, best1.q);
-      const double g1 = gap_of(line_stats(s, best1.state, s.exc));
-      if (p1 < options.effect_alpha && relevant(gc, g1)) {
-        best1.fits[0].p_value = p1;
-        best1.fits[0].gap_after = g1;
-        accepted.push_back(best1);
-        Choice best2;
-        for (size_t i = 0; i < std::size(kLinearEffects); ++i)
-          for (size_t j = i + 1; j < std::size(kLinearEffects); ++j) {
-            Choice c = evaluate({kLinearEffects[i], kLinearEffects[j]});
-            if (bic(c) < bic(best2)) best2 = c;
-          }
-        if (std::isfinite(best2.V) && bic(best2) < bic(best1)) {
-          // Nested test: the pair against the better of its own two members.
-          const Choice& a = singles[best2.set[0]];
-          const Choice& b = singles[best2.set[1]];
-          const Choice& sub = bic(a) < bic(b) ? a : b;
-          const double p2 = dg.f_test(sub.V, best2.V, std::max(1, best2.q - sub.q), best2.q);
-          const double gs = gap_of(line_stats(s, sub.state, s.exc));
-          const double g2 = gap_of(line_stats(s, best2.state, s.exc));
-          if (p2 < options.effect_alpha && relevant(gs, g2)) {
-            for (EffectFit& f : best2.fits) {
-              f.p_value = p2;
-              f.gap_after = g2;
-            }
-            accepted.push_back(best2);
-          }
+    if (!std::isfinite(best1.V)) return accepted;
+    const double p1 = dg_.f_test(Vc_, best1.V, best1.q, best1.q);
+    const double g1 = gap_of(line_stats(s_, best1.state, s_.exc));
+    if (!(p1 < o_.effect_alpha && relevant(gc_, g1))) return accepted;
+    best1.fits[0].p_value = p1;
+    best1.fits[0].gap_after = g1;
+    accepted.push_back(best1);
+    Choice best2 = best_pair();
+    if (std::isfinite(best2.V) && bic(best2) < bic(best1)) {
+      const Choice& a = singles[best2.set[0]];
+      const Choice& b = singles[best2.set[1]];
+      const Choice& sub = bic(a) < bic(b) ? a : b;
+      const double p2 = dg_.f_test(sub.V, best2.V, std::max(1, best2.q - sub.q), best2.q);
+      const double gs = gap_of(line_stats(s_, sub.state, s_.exc));
+      const double g2 = gap_of(line_stats(s_, best2.state, s_.exc));
+      if (p2 < o_.effect_alpha && relevant(gs, g2)) {
+        for (EffectFit& f : best2.fits) {
+          f.p_value = p2;
+          f.gap_after = g2;
         }
+        accepted.push_back(best2);
       }
     }
-    if (!accepted.empty()) {
-      cur = accepted.back().state;
-      for (const EffectFit& f : accepted.back().fits) rep.chosen.push_back(f);
-      // The single, then the pair that replaced it (both from the same base).
-      const std::string base = rep.steps.back().first;
-      for (const Choice& c : accepted) {
-        std::string what;
-        for (Effect e : c.set) what += (what.empty() ? "" : " + ") + std::string(to_string(e));
-        add_step(base, what, c.state);
-      }
-    }
+    return accepted;
   }
+
+ private:
+  // The set fitted jointly on the current state (Diagnosis::fit_set), the
+  // nonlinearity refitted when admitted, and its pooled cost.
+  Choice evaluate(const std::vector<Effect>& set) const {
+    Choice c;
+    c.set = set;
+    std::tie(c.state, c.fits) = dg_.fit_set(set, cur_, c.V);
+    if (nonlinear_) c.state.nl = dg_.fit_nonlinearity(c.state).state.nl;
+    c.V = line_stats(s_, c.state, s_.exc).pooled_cost;
+    for (const EffectFit& f : c.fits) c.q += f.dof;
+    return c;
+  }
+  // The best pair of distinct linear effects by BIC.
+  Choice best_pair() const {
+    Choice best2;
+    for (size_t i = 0; i < kLinearEffects.size(); ++i)
+      for (size_t j = i + 1; j < kLinearEffects.size(); ++j) {
+        Choice c = evaluate({kLinearEffects[i], kLinearEffects[j]});
+        if (bic(c) < bic(best2)) best2 = c;
+      }
+    return best2;
+  }
+  double bic(const Choice& c) const { return c.V + dg_.penalty() * c.q; }
+  // The relevance rule: the step must remove min_share of the current excess
+  // gap (or of the floor, when the excess is below it).
+  bool relevant(double g_from, double g_to) const {
+    return g_from - g_to >= o_.min_share * std::max(g_from - 1, floor_);
+  }
+
+  const Diagnosis& dg_;
+  const Spectra& s_;
+  const Augment& cur_;
+  bool nonlinear_;
+  const GapOptions& o_;
+  double Vc_ = 0, gc_ = 0, floor_ = 0;
+};
+
+// The chosen set (gap.hpp): leakage and nonlinearity by their own tests, then
+// the linear effects by LinearSelection. Fills rep.chosen and rep.steps;
+// returns the final state.
+Augment choose_effects(const Diagnosis& dg, const Spectra& s, const Augment& a0, const LineStats& st0, int drop,
+                       const GapOptions& options, GapReport& rep) {
+  rep.steps.emplace_back("model", st0.t);
+  bool nonlinear = false;
+  Augment cur = choose_leakage_and_nonlinearity(dg, s, a0, drop, options.alpha, rep, nonlinear);
+  const std::vector<Choice> accepted = LinearSelection(dg, s, cur, nonlinear, options).run();
+  if (accepted.empty()) return cur;
+  for (const EffectFit& f : accepted.back().fits) rep.chosen.push_back(f);
+  // The single, then the pair that replaced it (both from the same base).
+  const std::string base = rep.steps.back().first;
+  for (const Choice& c : accepted) {
+    std::string what;
+    for (Effect e : c.set) what += (what.empty() ? "" : " + ") + std::string(to_string(e));
+    add_step(s, base, what, c.state, rep);
+  }
+  return accepted.back().state;
+}
+
+// The report's conclusion from the final state `cur`: gap after, each chosen
+// effect's shrink, "present" (largest shrink alone first; ties by name), the
+// bands cleared when nothing is present and the gap test passes, and the
+// plot table.
+void conclude(const Spectra& s, const LineStats& st0, const Augment& cur, const GapOptions& options, GapReport& rep) {
   rep.periods_used = s.M - cur.first;
   const LineStats st1 = line_stats(s, cur, s.exc);
   rep.gap_after = gap_of(st1);
@@ -1198,7 +1285,6 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
     if (f.gap_after == 0) f.gap_after = rep.gap_after;
     f.shrink = 1.0 - f.gap_after / rep.gap_before;
   }
-  // "present", largest first: by the shrink of the effect alone.
   std::vector<std::pair<double, Effect>> order;
   for (const EffectFit& f : rep.chosen)
     for (const EffectFit& c : rep.candidates)
@@ -1211,12 +1297,52 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
     rep.gap_after = rep.gap_before;
     if (rep.p_gap >= options.alpha) rep.bands.clear();
   }
-
   const Eigen::Index K = static_cast<Eigen::Index>(s.exc.size());
   rep.frequency.resize(K);
   for (Eigen::Index i = 0; i < K; ++i) rep.frequency(i) = s.hz(s.exc[i]);
   rep.t_before = st0.t;
   rep.t_after = rep.present.empty() ? st0.t : st1.t;
+}
+
+}  // namespace
+
+/// Sim-to-real gap diagnosis (gap.hpp; CONTRACTS.md `fdsid gap`).
+///
+/// Method: the per-period DFT of the record; t(k) and the gap of the model as
+/// given (Pintelon 2002, Eq. 25); the detection tests and the bands; every
+/// effect fitted alone (the candidates); the chosen set by the tests and the
+/// relevance rule; the report.
+/// Numerical aspects: cost dominated by the joint fits of the 15 linear pairs,
+/// each O(K) per cost evaluation over a few hundred Nelder–Mead/Brent steps.
+/// Fails: Error(Input) as stated in gap.hpp.
+/// References: Pintelon, Guillaume, Schoukens et al. (2002); Benjamini &
+/// Hochberg (1995); Fisher (1932).
+GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, int inputs, const RecordMeta& meta,
+                       const GapOptions& options) {
+  check_inputs(model, record, inputs, meta, options);
+  const Spectra s = spectra_of(record, meta, model.domain);
+  if (s.exc.size() < 4)
+    throw Error(ErrorKind::Input, "meta field \"excited_lines\"", "needs at least 4 excited lines below P/2");
+  const Diagnosis dg(model, s);
+  GapReport rep;
+  rep.options = options;
+  rep.excited = static_cast<int>(s.exc.size());
+  rep.unexcited = static_cast<int>(s.ne.size());
+  const Augment a0 = dg.initial();
+  const LineStats st0 = line_stats(s, a0, s.exc);
+  require_noise_floor(s, st0);
+  detection_tests(dg, s, a0, st0, rep);
+  gap_bands(s, st0, options.fdr, rep);
+
+  rep.candidates = fits_alone(dg, s, a0, st0.pooled_cost, rep.p_nonlinearity);
+  const int drop = transient_periods(dg, s, a0, rep.p_leakage, options.alpha);
+  rep.candidates.push_back(leakage_alone(s, a0, drop, rep.p_leakage));
+  for (EffectFit& f : rep.candidates) f.shrink = 1.0 - f.gap_after / rep.gap_before;
+  std::stable_sort(rep.candidates.begin(), rep.candidates.end(),
+                   [](const EffectFit& a, const EffectFit& b) { return a.gap_after < b.gap_after; });
+
+  const Augment cur = choose_effects(dg, s, a0, st0, drop, options, rep);
+  conclude(s, st0, cur, options, rep);
   return rep;
 }
 
