@@ -43,9 +43,9 @@ Effect effect_from_string(std::string_view name) {
 
 std::vector<std::pair<std::string, double>> parameter_list(const EffectParameters& parameters) {
   using List = std::vector<std::pair<std::string, double>>;
-  auto flag = [](bool b) { return b ? 1.0 : 0.0; };
+  // One overload per effect; flags are listed as 1 or 0, names in sorted order.
   struct Lister {
-    decltype(flag) f;
+    static double f(bool b) { return b ? 1.0 : 0.0; }
     List operator()(const GainError& p) const { return {{"gain", p.gain}}; }
     List operator()(const Delay& p) const { return {{"samples", p.samples}, {"seconds", p.seconds}}; }
     List operator()(const SensorDynamics& p) const {
@@ -75,7 +75,7 @@ std::vector<std::pair<std::string, double>> parameter_list(const EffectParameter
       return {{"transient_periods", static_cast<double>(p.transient_periods)}};
     }
   };
-  return std::visit(Lister{flag}, parameters);
+  return std::visit(Lister{}, parameters);
 }
 
 static_assert(std::variant_size_v<EffectParameters> == kAllEffects.size());
@@ -332,6 +332,33 @@ double cost(const Spectra& s, const Weighted& W, const Eigen::VectorXcd& G) {
   return V;
 }
 
+// V = Σ w |T − m(k) G(k) U|² over the excited lines for a factor m (a
+// function of the line k) on the response G: the cost of a multiplicative
+// effect (delay, sensor dynamics) as its parameters vary.
+template <class Factor>
+double factor_cost(const Spectra& s, const Weighted& W, const Eigen::VectorXcd& G, const Factor& m) {
+  double v = 0;
+  for (size_t i = 0; i < s.exc.size(); ++i) {
+    const int k = s.exc[i];
+    v += W.w(i) * std::norm(W.T(i) - m(k) * G(k) * W.U(i));
+  }
+  return v;
+}
+
+// An additive term on top of the state's multiplier: X = mult · Û and the
+// target R = T − G Û at the excited lines, so that R ≈ X · term.
+void additive_target(const Spectra& s, const Weighted& W, const Eigen::VectorXcd& mult, const Eigen::VectorXcd& G,
+                     Eigen::VectorXcd& X, Eigen::VectorXcd& R) {
+  const Eigen::Index K = static_cast<Eigen::Index>(s.exc.size());
+  X.resize(K);
+  R.resize(K);
+  for (Eigen::Index i = 0; i < K; ++i) {
+    const int k = s.exc[i];
+    X(i) = mult(k) * W.U(i);
+    R(i) = W.T(i) - G(k) * W.U(i);
+  }
+}
+
 // Minimum of f over [lo, hi]: a grid of n points, then Brent (Boost) between
 // the neighbours of the best grid point.
 std::pair<double, double> minimize_1d(const std::function<double(double)>& f, double lo, double hi, int n) {
@@ -426,6 +453,16 @@ double weighted_ls(const std::vector<Eigen::VectorXcd>& Phi, const Eigen::Vector
   return (A * c - b).squaredNorm();
 }
 
+// The fits of one diagnosis: the model, the record's spectra, the BIC penalty
+// and one FFT plan pair. Each fit_* adds one effect to a state (Augment) and
+// returns the new state, its EffectFit and its cost V (gap.hpp's weighted
+// residual sum, pooled variances).
+// Method: closed form (gain), grid + Brent (delay, first-order low-pass),
+// grid + Nelder–Mead (second-order low-pass), variable projection over the
+// pole with the residue by weighted least squares (modes), weighted least
+// squares on the excited and unexcited lines (nonlinearity).
+// Numerical aspects: const and re-entrant but for the FFT buffers: one
+// diagnosis runs on one thread.
 class Diagnosis {
  public:
   Diagnosis(const StateSpace& model, const Spectra& s) : model_(model), s_(s), fft_(s.P) {
@@ -513,12 +550,7 @@ class Diagnosis {
     const Weighted W = weighted(s_, a);
     const Eigen::VectorXcd G = a.G();
     auto V = [&](double tau) {
-      double v = 0;
-      for (size_t i = 0; i < s_.exc.size(); ++i) {
-        const int k = s_.exc[i];
-        v += W.w(i) * std::norm(W.T(i) - std::polar(1.0, -2 * M_PI * s_.cycles(k) * tau) * G(k) * W.U(i));
-      }
-      return v;
+      return factor_cost(s_, W, G, [&](int k) { return std::polar(1.0, -2 * M_PI * s_.cycles(k) * tau); });
     };
     const double fmax = s_.cycles(s_.exc.back());
     const double hi = std::min(100.0, s_.P / 4.0), lo = -10.0;
@@ -567,12 +599,7 @@ class Diagnosis {
         if (!(lfc >= lo && lfc <= hi && zeta > 0.05 && zeta < (form == 2 ? 0.999 : 5.0)))
           return std::numeric_limits<double>::infinity();
         const double fc = std::exp(lfc);
-        double v = 0;
-        for (size_t i = 0; i < s_.exc.size(); ++i) {
-          const int k = s_.exc[i];
-          v += W.w(i) * std::norm(W.T(i) - lowpass(form, s_.cycles(k), fc, zeta) * G(k) * W.U(i));
-        }
-        return v;
+        return factor_cost(s_, W, G, [&](int k) { return lowpass(form, s_.cycles(k), fc, zeta); });
       };
       double lfc = 0, zeta = 0.7, v = 0;
       if (!second) {
@@ -722,12 +749,10 @@ class Diagnosis {
     const Weighted W = weighted(s_, a);
     const Eigen::VectorXcd G = a.G(), mult = a.multiplier();
     const int K = static_cast<int>(s_.exc.size());
-    Eigen::VectorXcd Xp(K), Rp(K), Xs(K), Rs(K);
-    for (int i = 0; i < K; ++i) {
-      const int k = s_.exc[i];
-      Xp(i) = mult(k) * W.U(i);
-      Rp(i) = W.T(i) - G(k) * W.U(i);
-      Xs(i) = G(k) * W.U(i);
+    Eigen::VectorXcd Xp, Rp, Xs(K), Rs(K);
+    additive_target(s_, W, mult, G, Xp, Rp);  // parallel: R ≈ mult · Û · mode
+    for (int i = 0; i < K; ++i) {             // series: T ≈ G Û · mode
+      Xs(i) = G(s_.exc[i]) * W.U(i);
       Rs(i) = W.T(i);
     }
     std::vector<cplx> starts;
@@ -769,7 +794,6 @@ class Diagnosis {
     const Eigen::VectorXcd CV = (model_.C.cast<cplx>() * V).row(0).transpose();
     const Eigen::VectorXcd WB = Wi * model_.B.cast<cplx>();
     const Eigen::VectorXcd mult = a.multiplier();
-    const int K = static_cast<int>(s_.exc.size());
     bool any = false;
     for (Eigen::Index i = 0; i < model_.A.rows(); ++i) {
       const cplx l = es.eigenvalues()(i);
@@ -781,21 +805,15 @@ class Diagnosis {
       Augment w = a;
       w.add[Effect::ModeMismatch] = -old;
       const Eigen::VectorXcd G = w.G();
-      Eigen::VectorXcd X(K), R(K);
-      for (int j = 0; j < K; ++j) {
-        X(j) = mult(s_.exc[j]) * W.U(j);
-        R(j) = W.T(j) - G(s_.exc[j]) * W.U(j);
-      }
+      Eigen::VectorXcd X, R;
+      additive_target(s_, W, mult, G, X, R);
       Trial t = fit_pole(w, Effect::ModeMismatch, X, R, false, {l}, false,
                          [this, old](Augment& s, cplx lambda, const Eigen::VectorXd& c) {
                            s.add[Effect::ModeMismatch] = mode_response(lambda, c) - old;
                          });
       if (!any || t.V < best.V) {
         any = true;
-        double th, sg;
-        theta_sigma(l, th, sg);
-        std::get<ModeMismatch>(t.fit.parameters).model_frequency_hz =
-            std::hypot(th, sg) / (2 * M_PI) / (model_.domain == Domain::Discrete ? s_.Ts : 1.0);
+        std::get<ModeMismatch>(t.fit.parameters).model_frequency_hz = resonance(l).frequency_hz;
         best = t;
       }
     }
