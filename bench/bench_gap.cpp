@@ -12,7 +12,7 @@
 namespace {
 
 // One diagnosis of a blind case (P = 1024, M = 8) with `effects` withheld.
-void BM_Diagnose(benchmark::State& state, std::vector<std::string> effects) {
+void BM_Diagnose(benchmark::State& state, std::vector<fdsid::Effect> effects) {
   fdsid::GapCaseOptions o;
   o.effects = effects;
   o.strength = effects.empty() ? fdsid::Strength::None : fdsid::Strength::Clear;
@@ -23,10 +23,10 @@ void BM_Diagnose(benchmark::State& state, std::vector<std::string> effects) {
     benchmark::DoNotOptimize(r.gap_after);
   }
 }
-BENCHMARK_CAPTURE(BM_Diagnose, none, std::vector<std::string>{})->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Diagnose, unmodelled_mode, std::vector<std::string>{"unmodelled_mode"})
+BENCHMARK_CAPTURE(BM_Diagnose, none, std::vector<fdsid::Effect>{})->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Diagnose, unmodelled_mode, std::vector<fdsid::Effect>{fdsid::Effect::UnmodelledMode})
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Diagnose, delay_and_nonlinearity, std::vector<std::string>{"delay", "nonlinearity"})
+BENCHMARK_CAPTURE(BM_Diagnose, delay_and_nonlinearity, std::vector<fdsid::Effect>{fdsid::Effect::Delay, fdsid::Effect::Nonlinearity})
     ->Unit(benchmark::kMillisecond);
 
 // gap-validate: 100 cases, files written and read back, 2 threads.

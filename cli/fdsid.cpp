@@ -485,7 +485,7 @@ int run_gap(const std::string& json_path, const std::string& plot_path, const st
       << " excited lines, M = " << meta.periods << "), after " << sci(r.gap_after) << "\n";
   out << "verdict: ";
   if (r.present.empty()) out << "no significant gap (noise alone at level " << o.alpha << ")\n";
-  for (size_t i = 0; i < r.present.size(); ++i) out << (i ? ", " : "") << r.present[i];
+  for (size_t i = 0; i < r.present.size(); ++i) out << (i ? ", " : "") << fdsid::to_string(r.present[i]);
   if (!r.present.empty()) out << "\n";
   out << "tests: p(gap) " << sci(r.p_gap) << ", p(nonlinearity, " << r.unexcited << " unexcited lines) "
       << sci(r.p_nonlinearity) << ", p(leakage) " << sci(r.p_leakage) << "\n";
@@ -497,10 +497,10 @@ int run_gap(const std::string& json_path, const std::string& plot_path, const st
   out << "candidates (each alone):\n";
   for (const fdsid::EffectFit& f : r.candidates) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "  %-16s gap_after %-10.4g shrink %-8.3f p %-9.2e", f.effect.c_str(), f.gap_after,
+    std::snprintf(buf, sizeof buf, "  %-16s gap_after %-10.4g shrink %-8.3f p %-9.2e", fdsid::to_string(f.effect()), f.gap_after,
                   f.shrink, f.p_value);
     out << buf;
-    for (const auto& kv : f.parameters) out << " " << kv.first << "=" << sci(kv.second, 4);
+    for (const auto& kv : fdsid::parameter_list(f.parameters)) out << " " << kv.first << "=" << sci(kv.second, 4);
     out << "\n";
   }
   for (const std::string& n : r.notes) out << "note: " << n << "\n";

@@ -20,10 +20,17 @@
 namespace fdsid {
 namespace {
 
-GapCase make(std::vector<std::string> effects, Strength s, std::uint64_t seed, bool noise = true, int P = 1024,
+/// The CONTRACTS.md names of kAllEffects.
+std::vector<std::string> gap_effect_names() {
+  std::vector<std::string> n;
+  for (Effect e : kAllEffects) n.emplace_back(to_string(e));
+  return n;
+}
+
+GapCase make(const std::vector<std::string>& effects, Strength s, std::uint64_t seed, bool noise = true, int P = 1024,
              int M = 8) {
   GapCaseOptions o;
-  o.effects = std::move(effects);
+  for (const std::string& n : effects) o.effects.push_back(effect_from_string(n));
   o.strength = s;
   o.seed = seed;
   o.noise = noise;
@@ -245,15 +252,16 @@ TEST(GapCases, CalibrationRatioInsideTheRequestedRange) {
 }
 
 TEST(GapCases, PairsCalibrateEachEffect) {
-  const auto& names = gap_effect_names();
+  const auto names = gap_effect_names();
   std::uint64_t seed = 1;
   for (std::size_t i = 0; i < names.size(); ++i)
     for (std::size_t j = i + 1; j < names.size(); ++j, ++seed) {
       const Strength s = seed % 2 ? Strength::Clear : Strength::Subtle;
       const auto range = gap_ratio_range(s);
       const GapCase c = make({names[i], names[j]}, s, seed);
-      EXPECT_EQ(c.effects, (std::vector<std::string>{names[i], names[j]}));
-      for (const auto& n : c.effects) {
+      EXPECT_EQ(c.effects, (std::vector<Effect>{effect_from_string(names[i]), effect_from_string(names[j])}));
+      for (Effect e : c.effects) {
+        const std::string n = to_string(e);
         const double r = c.truth["details"][n]["ratio"].get<double>();
         EXPECT_GE(r, range[0] * (1 - 1e-6)) << n;
         EXPECT_LE(r, range[1] * (1 + 1e-6)) << n;
@@ -294,14 +302,19 @@ TEST(GapCases, NamesAndErrors) {
       EXPECT_EQ(e.kind(), ErrorKind::Input) << e.what();
     }
   };
+  try {
+    effect_from_string("friction");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Input) << e.what();
+  }
+  for (Effect e : kAllEffects) EXPECT_EQ(effect_from_string(to_string(e)), e);
   GapCaseOptions o;
-  o.effects = {"friction"};
+  o.effects = {Effect::Delay, Effect::Delay};
   expect_input(o);
-  o.effects = {"delay", "delay"};
+  o.effects = {Effect::Delay, Effect::Leakage, Effect::GainError};
   expect_input(o);
-  o.effects = {"delay", "leakage", "gain_error"};
-  expect_input(o);
-  o.effects = {"delay"};
+  o.effects = {Effect::Delay};
   o.strength = Strength::None;
   expect_input(o);
   o.strength = Strength::Clear;

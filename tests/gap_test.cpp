@@ -23,20 +23,25 @@ namespace {
 
 constexpr int kP = 512, kM = 8;
 
-bool has(const GapReport& r, const std::string& e) {
-  return std::find(r.present.begin(), r.present.end(), e) != r.present.end();
+std::vector<std::string> names(const std::vector<Effect>& effects) {
+  std::vector<std::string> n;
+  for (Effect e : effects) n.emplace_back(to_string(e));
+  return n;
 }
+bool has(const GapReport& r, const std::string& e) { return std::find(r.present.begin(), r.present.end(), effect_from_string(e)) != r.present.end(); }
 double param(const GapReport& r, const std::string& e, const std::string& name) {
   for (const EffectFit& f : r.chosen)
-    if (f.effect == e) return f.parameters.at(name);
+    if (f.effect() == effect_from_string(e))
+      for (const auto& kv : parameter_list(f.parameters))
+        if (kv.first == name) return kv.second;
   return NAN;
 }
 std::string verdict(const GapReport& r) {
   std::string s = "gap " + std::to_string(r.gap_before) + " -> " + std::to_string(r.gap_after) + ", present [";
-  for (const auto& e : r.present) s += e + " ";
+  for (Effect e : r.present) s += std::string(to_string(e)) + " ";
   s += "], p_gap " + std::to_string(r.p_gap) + ", p_nl " + std::to_string(r.p_nonlinearity) + ", p_leak " +
        std::to_string(r.p_leakage) + "; candidates:";
-  for (const auto& c : r.candidates) s += " " + c.effect + "=" + std::to_string(c.gap_after);
+  for (const auto& c : r.candidates) s += " " + std::string(to_string(c.effect())) + "=" + std::to_string(c.gap_after);
   return s;
 }
 
@@ -129,7 +134,7 @@ TEST(GapDiagnosis, GainError) {
   const Eigen::MatrixXd rec = simulate_periodic_record(t, options(7), meta);
   const GapReport r = diagnose_gap(g, rec, 1, meta);
   SCOPED_TRACE(verdict(r));
-  EXPECT_EQ(r.present, std::vector<std::string>{"gain_error"});
+  EXPECT_EQ(names(r.present), std::vector<std::string>{"gain_error"});
   // The stages the figure draws: the model as given, then the gain added.
   ASSERT_EQ(r.steps.size(), 2u);
   EXPECT_EQ(r.steps[0].first, "model");
@@ -149,7 +154,7 @@ TEST(GapDiagnosis, OneSampleDelay) {
   const Eigen::MatrixXd rec = simulate_periodic_record(testing::one_sample_delay(g), options(8), meta);
   const GapReport r = diagnose_gap(g, rec, 1, meta);
   SCOPED_TRACE(verdict(r));
-  EXPECT_EQ(r.present, std::vector<std::string>{"delay"});
+  EXPECT_EQ(names(r.present), std::vector<std::string>{"delay"});
   EXPECT_NEAR(param(r, "delay", "samples"), 1.0, 0.01);  // same sd argument as the gain: phase sd < 1e-3 rad
   EXPECT_LT(r.gap_after, 2.0);
 }
@@ -161,7 +166,7 @@ TEST(GapDiagnosis, UnmodelledModeAndItsBand) {
   const Eigen::MatrixXd rec = simulate_periodic_record(with_mode(g, f, 0.05), options(9), meta);
   const GapReport r = diagnose_gap(g, rec, 1, meta);
   SCOPED_TRACE(verdict(r));
-  EXPECT_EQ(r.present, std::vector<std::string>{"unmodelled_mode"});
+  EXPECT_EQ(names(r.present), std::vector<std::string>{"unmodelled_mode"});
   // The mode's frequency to within one line spacing 1/P.
   EXPECT_NEAR(param(r, "unmodelled_mode", "frequency_hz"), f, 1.0 / kP);
   ASSERT_FALSE(r.bands.empty());
@@ -198,7 +203,7 @@ TEST(GapDiagnosis, TransientFromRestIsLeakage) {
       });
   const GapReport r = diagnose_gap(g, rec, 1, meta);
   SCOPED_TRACE(verdict(r));
-  EXPECT_EQ(r.present, std::vector<std::string>{"leakage"});
+  EXPECT_EQ(names(r.present), std::vector<std::string>{"leakage"});
   EXPECT_LT(r.p_leakage, 1e-6);
   EXPECT_LT(r.periods_used, kM);
   EXPECT_LT(r.gap_after, 2.0);

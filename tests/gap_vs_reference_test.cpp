@@ -121,10 +121,10 @@ TEST(GapVsReference, FittedGainAndDelayGiveTheReportedGapAfter) {
     const std::string effect = which == 0 ? "gain_error" : "delay";
     const EffectFit* fit = nullptr;
     for (const EffectFit& f : fast.candidates)
-      if (f.effect == effect) fit = &f;
+      if (to_string(f.effect()) == effect) fit = &f;
     ASSERT_NE(fit, nullptr);
     const reference::Model rm = to_reference(g);
-    const Real par(fit->parameters.at(which == 0 ? "gain" : "samples"));
+    const Real par(which == 0 ? std::get<GainError>(fit->parameters).gain : std::get<Delay>(fit->parameters).samples);
     const int P = c.meta.period;
     auto response = [&](int k) {
       const Real w = 2 * boost::math::constants::pi<Real>() * k / P;

@@ -148,7 +148,7 @@ TEST(Figures, GapFigureCarriesEveryStageAndTheBands) {
   EXPECT_EQ(t.bands.size(), r.bands.size());
   // Every candidate effect is named on the second panel's axis, best first.
   ASSERT_EQ(f.panels[1].x.categories.size(), r.candidates.size());
-  for (size_t i = 0; i < r.candidates.size(); ++i) EXPECT_EQ(f.panels[1].x.categories[i], r.candidates[i].effect);
+  for (size_t i = 0; i < r.candidates.size(); ++i) EXPECT_EQ(f.panels[1].x.categories[i], to_string(r.candidates[i].effect()));
 }
 
 // ---------------------------------------------------------------------------

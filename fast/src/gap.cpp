@@ -8,7 +8,9 @@
 #include <boost/math/distributions/students_t.hpp>
 #include <boost/math/tools/minima.hpp>
 #include <cmath>
+#include <cstring>
 #include <functional>
+#include <map>
 #include <mutex>
 #include <numeric>
 #include <tuple>
@@ -18,6 +20,70 @@
 
 namespace fdsid {
 
+const char* to_string(Effect e) {
+  switch (e) {
+    case Effect::GainError: return "gain_error";
+    case Effect::Delay: return "delay";
+    case Effect::SensorDynamics: return "sensor_dynamics";
+    case Effect::UnmodelledMode: return "unmodelled_mode";
+    case Effect::ModeMismatch: return "mode_mismatch";
+    case Effect::Nonlinearity: return "nonlinearity";
+    case Effect::Leakage: return "leakage";
+  }
+  return "?";
+}
+
+Effect effect_from_string(std::string_view name) {
+  for (Effect e : kAllEffects)
+    if (name == to_string(e)) return e;
+  std::string list;
+  for (Effect e : kAllEffects) list += (list.empty() ? "" : ", ") + std::string(to_string(e));
+  throw Error(ErrorKind::Input, "effect", "unknown effect '" + std::string(name) + "' (known: " + list + ")");
+}
+
+std::vector<std::pair<std::string, double>> parameter_list(const EffectParameters& parameters) {
+  using List = std::vector<std::pair<std::string, double>>;
+  // One overload per effect; flags are listed as 1 or 0, names in sorted order.
+  struct Lister {
+    static double f(bool b) { return b ? 1.0 : 0.0; }
+    List operator()(const GainError& p) const { return {{"gain", p.gain}}; }
+    List operator()(const Delay& p) const { return {{"samples", p.samples}, {"seconds", p.seconds}}; }
+    List operator()(const SensorDynamics& p) const {
+      List l = {{"cutoff_hz", p.cutoff_hz}};
+      if (p.order == 2) l.emplace_back("damping", p.damping);
+      l.emplace_back("discrete", f(p.discrete));
+      l.emplace_back("order", static_cast<double>(p.order));
+      return l;
+    }
+    List operator()(const UnmodelledMode& p) const {
+      List l;
+      if (p.mode) l = {{"damping", p.mode->damping}, {"frequency_hz", p.mode->frequency_hz}};
+      l.emplace_back("series", f(p.series));
+      return l;
+    }
+    List operator()(const ModeMismatch& p) const {
+      List l;
+      if (p.mode) l = {{"damping", p.mode->damping}, {"frequency_hz", p.mode->frequency_hz}};
+      if (p.model_frequency_hz) l.emplace_back("model_frequency_hz", *p.model_frequency_hz);
+      return l;
+    }
+    List operator()(const Nonlinearity& p) const {
+      if (!p.fitted) return {};
+      return {{"a2", p.a2}, {"a3", p.a3}, {"at_input", f(p.at_input)}};
+    }
+    List operator()(const Leakage& p) const {
+      return {{"transient_periods", static_cast<double>(p.transient_periods)}};
+    }
+  };
+  return std::visit(Lister{}, parameters);
+}
+
+static_assert(std::variant_size_v<EffectParameters> == kAllEffects.size());
+static_assert(std::is_same_v<std::variant_alternative_t<static_cast<size_t>(Effect::ModeMismatch), EffectParameters>,
+                             ModeMismatch>);
+static_assert(std::is_same_v<std::variant_alternative_t<static_cast<size_t>(Effect::Leakage), EffectParameters>,
+                             Leakage>);
+
 double f2_survival(double t, int d2) {
   // F(2, d2) has density (1 + 2t/d2)^{−d2/2 − 1}; integrating from t to ∞ gives
   // (1 + 2t/d2)^{−d2/2}.
@@ -26,8 +92,17 @@ double f2_survival(double t, int d2) {
 
 namespace {
 
-constexpr const char* kLinearEffects[] = {"gain_error", "delay", "sensor_dynamics", "unmodelled_mode",
-                                          "mode_mismatch"};
+// The linear effects: the first five of kAllEffects.
+constexpr std::array<Effect, 5> kLinearEffects = {Effect::GainError, Effect::Delay, Effect::SensorDynamics,
+                                                  Effect::UnmodelledMode, Effect::ModeMismatch};
+static_assert(is_linear(Effect::ModeMismatch) && !is_linear(Effect::Nonlinearity));
+
+// Effects ordered by name: the augmented model's factors and terms are
+// multiplied and summed in this order (as when they were keyed by name), which
+// fixes the rounding of G.
+struct ByName {
+  bool operator()(Effect a, Effect b) const { return std::strcmp(to_string(a), to_string(b)) < 0; }
+};
 
 // The record's DFT per period at every line 0 … P/2 (Eq. 4 scaling).
 struct Spectra {
@@ -93,7 +168,7 @@ class Fft {
 // first … M−1.
 struct Augment {
   Eigen::VectorXcd base;
-  std::map<std::string, Eigen::VectorXcd> mult, add;
+  std::map<Effect, Eigen::VectorXcd, ByName> mult, add;
   Eigen::MatrixXcd nl;  // M × lines, or empty
   int first = 0;
   Eigen::VectorXcd multiplier() const {
@@ -107,7 +182,7 @@ struct Augment {
     return g;
   }
   Eigen::VectorXcd G() const { return multiplier().cwiseProduct(inner()); }
-  Augment without(const std::string& e) const {
+  Augment without(Effect e) const {
     Augment a = *this;
     a.mult.erase(e);
     a.add.erase(e);
@@ -142,6 +217,34 @@ Eigen::VectorXd pooled(const Eigen::VectorXd& v) {
   return p;
 }
 
+// The periods first … last (inclusive), in order.
+std::vector<int> period_range(int first, int last) {
+  std::vector<int> p;
+  for (int l = first; l <= last; ++l) p.push_back(l);
+  return p;
+}
+
+// Pintelon (2002) Eq. 25 at one line: the sample mean Ē(k) and the sample
+// variance s²(k) (divisor R − 1) over the R periods `periods` of the residual
+// E_l(k) = Y_l(k) − G(k) U_l(k) − N_l(k), N the per-period nonlinear term
+// (none when `nl` is empty). `e` is scratch of size R. The one place the
+// per-period residual statistics are formed (line_stats, the period deviation
+// tests).
+struct Moments {
+  cplx mean;
+  double var;
+};
+Moments residual_moments(const Spectra& s, const Eigen::VectorXcd& G, const Eigen::MatrixXcd& nl, int k,
+                         const std::vector<int>& periods, Eigen::VectorXcd& e) {
+  const int R = static_cast<int>(periods.size());
+  for (int q = 0; q < R; ++q) {
+    const int p = periods[q];
+    e(q) = s.Y(p, k) - G(k) * s.U(p, k) - (nl.size() ? nl(p, k) : cplx(0));
+  }
+  const cplx m = e.mean();
+  return {m, (e.array() - m).abs2().sum() / (R - 1)};
+}
+
 // t(k) over the line indices `idx` for the augmented model.
 LineStats line_stats(const Spectra& s, const Augment& a, const std::vector<int>& idx) {
   const int M = s.M - a.first;
@@ -151,18 +254,13 @@ LineStats line_stats(const Spectra& s, const Augment& a, const std::vector<int>&
   st.var.resize(idx.size());
   st.mean.resize(idx.size());
   const Eigen::VectorXcd G = a.G();
+  const std::vector<int> periods = period_range(a.first, s.M - 1);
   Eigen::VectorXcd e(M);
   for (size_t i = 0; i < idx.size(); ++i) {
-    const int k = idx[i];
-    for (int l = 0; l < M; ++l) {
-      const int p = a.first + l;
-      e(l) = s.Y(p, k) - G(k) * s.U(p, k) - (a.nl.size() ? a.nl(p, k) : cplx(0));
-    }
-    const cplx m = e.mean();
-    const double v = (e.array() - m).abs2().sum() / (M - 1);
-    st.mean(i) = m;
-    st.var(i) = v;
-    st.t(i) = M * std::norm(m) / v;
+    const Moments mo = residual_moments(s, G, a.nl, idx[i], periods, e);
+    st.mean(i) = mo.mean;
+    st.var(i) = mo.var;
+    st.t(i) = M * std::norm(mo.mean) / mo.var;
   }
   const Eigen::VectorXd pv = pooled(st.var);
   for (size_t i = 0; i < idx.size(); ++i) st.pooled_cost += M * std::norm(st.mean(i)) / pv(i);
@@ -184,15 +282,14 @@ double fisher_p(const Eigen::VectorXd& t, int M) {
 double period_deviation_p(const Spectra& s, const Augment& a, int l) {
   const int R = s.M - l - 1;  // periods after l
   const Eigen::VectorXcd G = a.G();
+  const std::vector<int> later = period_range(l + 1, s.M - 1);
   Eigen::VectorXd t(s.all.size());
   Eigen::VectorXcd e(R);
   for (size_t i = 0; i < s.all.size(); ++i) {
     const int k = s.all[i];
-    for (int q = 0; q < R; ++q) e(q) = s.Y(l + 1 + q, k) - G(k) * s.U(l + 1 + q, k);
-    const cplx m = e.mean();
-    const double v = (e.array() - m).abs2().sum() / (R - 1);
-    const cplx d = s.Y(l, k) - G(k) * s.U(l, k) - m;
-    t(i) = std::norm(d) / (v * (1.0 + 1.0 / R));  // ~ F(2, 2R − 2)
+    const Moments mo = residual_moments(s, G, Eigen::MatrixXcd(), k, later, e);
+    const cplx d = s.Y(l, k) - G(k) * s.U(l, k) - mo.mean;
+    t(i) = std::norm(d) / (mo.var * (1.0 + 1.0 / R));  // ~ F(2, 2R − 2)
   }
   return fisher_p(t, R);  // the same combination with M − 1 → R − 1
 }
@@ -233,6 +330,33 @@ double cost(const Spectra& s, const Weighted& W, const Eigen::VectorXcd& G) {
   double V = 0;
   for (size_t i = 0; i < s.exc.size(); ++i) V += W.w(i) * std::norm(W.T(i) - G(s.exc[i]) * W.U(i));
   return V;
+}
+
+// V = Σ w |T − m(k) G(k) U|² over the excited lines for a factor m (a
+// function of the line k) on the response G: the cost of a multiplicative
+// effect (delay, sensor dynamics) as its parameters vary.
+template <class Factor>
+double factor_cost(const Spectra& s, const Weighted& W, const Eigen::VectorXcd& G, const Factor& m) {
+  double v = 0;
+  for (size_t i = 0; i < s.exc.size(); ++i) {
+    const int k = s.exc[i];
+    v += W.w(i) * std::norm(W.T(i) - m(k) * G(k) * W.U(i));
+  }
+  return v;
+}
+
+// An additive term on top of the state's multiplier: X = mult · Û and the
+// target R = T − G Û at the excited lines, so that R ≈ X · term.
+void additive_target(const Spectra& s, const Weighted& W, const Eigen::VectorXcd& mult, const Eigen::VectorXcd& G,
+                     Eigen::VectorXcd& X, Eigen::VectorXcd& R) {
+  const Eigen::Index K = static_cast<Eigen::Index>(s.exc.size());
+  X.resize(K);
+  R.resize(K);
+  for (Eigen::Index i = 0; i < K; ++i) {
+    const int k = s.exc[i];
+    X(i) = mult(k) * W.U(i);
+    R(i) = W.T(i) - G(k) * W.U(i);
+  }
 }
 
 // Minimum of f over [lo, hi]: a grid of n points, then Brent (Boost) between
@@ -329,6 +453,16 @@ double weighted_ls(const std::vector<Eigen::VectorXcd>& Phi, const Eigen::Vector
   return (A * c - b).squaredNorm();
 }
 
+// The fits of one diagnosis: the model, the record's spectra, the BIC penalty
+// and one FFT plan pair. Each fit_* adds one effect to a state (Augment) and
+// returns the new state, its EffectFit and its cost V (gap.hpp's weighted
+// residual sum, pooled variances).
+// Method: closed form (gain), grid + Brent (delay, first-order low-pass),
+// grid + Nelder–Mead (second-order low-pass), variable projection over the
+// pole with the residue by weighted least squares (modes), weighted least
+// squares on the excited and unexcited lines (nonlinearity).
+// Numerical aspects: const and re-entrant but for the FFT buffers: one
+// diagnosis runs on one thread.
 class Diagnosis {
  public:
   Diagnosis(const StateSpace& model, const Spectra& s) : model_(model), s_(s), fft_(s.P) {
@@ -363,20 +497,24 @@ class Diagnosis {
     return boost::math::cdf(boost::math::complement(boost::math::fisher_f(q, d2), F));
   }
 
-  Trial fit(const std::string& effect, const Augment& a) const {
+  Trial fit(Effect effect, const Augment& a) const {
     const Augment b = a.without(effect);
-    if (effect == "gain_error") return fit_gain(b);
-    if (effect == "delay") return fit_delay(b);
-    if (effect == "sensor_dynamics") return fit_sensor(b);
-    if (effect == "unmodelled_mode") return fit_mode(b);
-    if (effect == "mode_mismatch") return fit_mismatch(b);
+    switch (effect) {
+      case Effect::GainError: return fit_gain(b);
+      case Effect::Delay: return fit_delay(b);
+      case Effect::SensorDynamics: return fit_sensor(b);
+      case Effect::UnmodelledMode: return fit_mode(b);
+      case Effect::ModeMismatch: return fit_mismatch(b);
+      case Effect::Nonlinearity:
+      case Effect::Leakage: break;  // leakage is no fit of the response; never asked for
+    }
     return fit_nonlinearity(b);
   }
 
   // Joint fit of a set of linear effects: each fitted in turn on top of the
   // others, then each refitted with the others fixed (coordinate descent, two
   // rounds).
-  std::pair<Augment, std::vector<EffectFit>> fit_set(const std::vector<std::string>& set, const Augment& a,
+  std::pair<Augment, std::vector<EffectFit>> fit_set(const std::vector<Effect>& set, const Augment& a,
                                                      double& V) const {
     Augment cur = a;
     std::vector<EffectFit> fits(set.size());
@@ -401,8 +539,8 @@ class Diagnosis {
       den += W.w(i) * std::norm(x);
     }
     const double g = den > 0 ? num / den : 1.0;
-    Trial t{a, {"gain_error", 0, 0, 1, 1, {{"gain", g}}}, 0};
-    t.state.mult["gain_error"] = Eigen::VectorXcd::Constant(a.base.size(), g);
+    Trial t{a, {0, 0, 1, 1, GainError{g}}, 0};
+    t.state.mult[Effect::GainError] = Eigen::VectorXcd::Constant(a.base.size(), g);
     t.V = cost(s_, W, t.state.G());
     return t;
   }
@@ -412,21 +550,16 @@ class Diagnosis {
     const Weighted W = weighted(s_, a);
     const Eigen::VectorXcd G = a.G();
     auto V = [&](double tau) {
-      double v = 0;
-      for (size_t i = 0; i < s_.exc.size(); ++i) {
-        const int k = s_.exc[i];
-        v += W.w(i) * std::norm(W.T(i) - std::polar(1.0, -2 * M_PI * s_.cycles(k) * tau) * G(k) * W.U(i));
-      }
-      return v;
+      return factor_cost(s_, W, G, [&](int k) { return std::polar(1.0, -2 * M_PI * s_.cycles(k) * tau); });
     };
     const double fmax = s_.cycles(s_.exc.back());
     const double hi = std::min(100.0, s_.P / 4.0), lo = -10.0;
     const int n = static_cast<int>(std::ceil((hi - lo) * 16 * fmax)) + 2;  // ≥ 16 points per cycle at f_max
     const auto best = minimize_1d(V, lo, hi, std::max(n, 50));
-    Trial t{a, {"delay", 0, 0, 1, 1, {{"samples", best.first}, {"seconds", best.first * s_.Ts}}}, best.second};
+    Trial t{a, {0, 0, 1, 1, Delay{best.first, best.first * s_.Ts}}, best.second};
     Eigen::VectorXcd m(a.base.size());
     for (Eigen::Index k = 0; k < m.size(); ++k) m(k) = std::polar(1.0, -2 * M_PI * s_.cycles(k) * best.first);
-    t.state.mult["delay"] = m;
+    t.state.mult[Effect::Delay] = m;
     return t;
   }
 
@@ -455,7 +588,7 @@ class Diagnosis {
     const Weighted W = weighted(s_, a);
     const Eigen::VectorXcd G = a.G();
     const double fmin = s_.cycles(s_.exc.front()), fmax = s_.cycles(s_.exc.back());
-    Trial best;
+    Trial best{{}, {0, 0, 0, 1, SensorDynamics{}}, 0};
     double best_score = std::numeric_limits<double>::infinity();
     for (int form = 0; form < 4; ++form) {
       const bool second = form >= 2;
@@ -466,12 +599,7 @@ class Diagnosis {
         if (!(lfc >= lo && lfc <= hi && zeta > 0.05 && zeta < (form == 2 ? 0.999 : 5.0)))
           return std::numeric_limits<double>::infinity();
         const double fc = std::exp(lfc);
-        double v = 0;
-        for (size_t i = 0; i < s_.exc.size(); ++i) {
-          const int k = s_.exc[i];
-          v += W.w(i) * std::norm(W.T(i) - lowpass(form, s_.cycles(k), fc, zeta) * G(k) * W.U(i));
-        }
-        return v;
+        return factor_cost(s_, W, G, [&](int k) { return lowpass(form, s_.cycles(k), fc, zeta); });
       };
       double lfc = 0, zeta = 0.7, v = 0;
       if (!second) {
@@ -499,14 +627,11 @@ class Diagnosis {
       if (v + penalty_ * dof < best_score) {
         best_score = v + penalty_ * dof;
         const double fc = std::exp(lfc);
-        best = Trial{a,
-                     {"sensor_dynamics", 0, 0, dof, 1,
-                      {{"cutoff_hz", fc / s_.Ts}, {"order", second ? 2.0 : 1.0}, {"discrete", form % 2 == 0 ? 1.0 : 0.0}}},
+        best = Trial{a, {0, 0, dof, 1, SensorDynamics{fc / s_.Ts, second ? 2 : 1, form % 2 == 0, second ? zeta : 0.0}},
                      v};
-        if (second) best.fit.parameters["damping"] = zeta;
         Eigen::VectorXcd m(a.base.size());
         for (Eigen::Index k = 0; k < m.size(); ++k) m(k) = lowpass(form, s_.cycles(k), fc, zeta);
-        best.state.mult["sensor_dynamics"] = m;
+        best.state.mult[Effect::SensorDynamics] = m;
       }
     }
     return best;
@@ -537,17 +662,16 @@ class Diagnosis {
     theta = std::abs(s.imag());
     sigma = -s.real();
   }
-  void report_mode(EffectFit& f, cplx lambda) const {
+  Resonance resonance(cplx lambda) const {
     double th, sg;
     theta_sigma(lambda, th, sg);
     const double wn = std::hypot(th, sg);
-    f.parameters["frequency_hz"] = wn / (2 * M_PI) / (model_.domain == Domain::Discrete ? s_.Ts : 1.0);
-    f.parameters["damping"] = sg / wn;
+    return {wn / (2 * M_PI) / (model_.domain == Domain::Discrete ? s_.Ts : 1.0), sg / wn};
   }
 
   // Variable projection over the pole (θ, ln σ): the residue (and d) by weighted
   // least squares for each pole. R ≈ X · mode.
-  Trial fit_pole(const Augment& a, const std::string& name, const Eigen::VectorXcd& X, const Eigen::VectorXcd& R,
+  Trial fit_pole(const Augment& a, Effect effect, const Eigen::VectorXcd& X, const Eigen::VectorXcd& R,
                  bool with_d, const std::vector<cplx>& starts, bool grid,
                  const std::function<void(Augment&, cplx, const Eigen::VectorXd&)>& apply) const {
     const Weighted W = weighted(s_, a);
@@ -596,7 +720,13 @@ class Diagnosis {
       if (std::isfinite(jbest)) x0.push_back(gbest);
     }
     const int dof = with_d ? 5 : 4;
-    Trial best{a, {name, 0, 0, dof, 1, {}}, std::numeric_limits<double>::infinity()};
+    // The fitted resonance goes into the effect's parameters (mode_mismatch
+    // or unmodelled_mode); absent when no start gives a finite fit.
+    const auto parameters = [effect](std::optional<Resonance> r) -> EffectParameters {
+      if (effect == Effect::ModeMismatch) return ModeMismatch{r, std::nullopt};
+      return UnmodelledMode{r, false};
+    };
+    Trial best{a, {0, 0, dof, 1, parameters(std::nullopt)}, std::numeric_limits<double>::infinity()};
     for (const Eigen::Vector2d& st : x0) {
       const Eigen::Vector2d v = nelder_mead(J, st, Eigen::Vector2d(0.02 * st(0), 0.3));
       const double j = J(v);
@@ -604,9 +734,8 @@ class Diagnosis {
       const cplx lambda = mode_pole(model_.domain, v(0), std::exp(v(1)));
       best.V = j;
       best.state = a;
-      best.fit = EffectFit{name, 0, 0, dof, 1, {}};
+      best.fit = EffectFit{0, 0, dof, 1, parameters(resonance(lambda))};
       apply(best.state, lambda, c);
-      report_mode(best.fit, lambda);
     }
     if (!std::isfinite(best.V)) best.V = cost(s_, W, a.G());  // nothing to refine: the state unchanged
     return best;
@@ -620,12 +749,10 @@ class Diagnosis {
     const Weighted W = weighted(s_, a);
     const Eigen::VectorXcd G = a.G(), mult = a.multiplier();
     const int K = static_cast<int>(s_.exc.size());
-    Eigen::VectorXcd Xp(K), Rp(K), Xs(K), Rs(K);
-    for (int i = 0; i < K; ++i) {
-      const int k = s_.exc[i];
-      Xp(i) = mult(k) * W.U(i);
-      Rp(i) = W.T(i) - G(k) * W.U(i);
-      Xs(i) = G(k) * W.U(i);
+    Eigen::VectorXcd Xp, Rp, Xs(K), Rs(K);
+    additive_target(s_, W, mult, G, Xp, Rp);  // parallel: R ≈ mult · Û · mode
+    for (int i = 0; i < K; ++i) {             // series: T ≈ G Û · mode
+      Xs(i) = G(s_.exc[i]) * W.U(i);
       Rs(i) = W.T(i);
     }
     std::vector<cplx> starts;
@@ -645,12 +772,12 @@ class Diagnosis {
     } catch (const Error&) {
       // the subspace start is optional; the grid still runs
     }
-    Trial par = fit_pole(a, "unmodelled_mode", Xp, Rp, true, starts, true,
-                         [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.add["unmodelled_mode"] = mode_response(l, c); });
-    Trial ser = fit_pole(a, "unmodelled_mode", Xs, Rs, true, starts, true,
-                         [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.mult["unmodelled_mode"] = mode_response(l, c); });
-    par.fit.parameters["series"] = 0;
-    ser.fit.parameters["series"] = 1;
+    Trial par = fit_pole(a, Effect::UnmodelledMode, Xp, Rp, true, starts, true,
+                         [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.add[Effect::UnmodelledMode] = mode_response(l, c); });
+    Trial ser = fit_pole(a, Effect::UnmodelledMode, Xs, Rs, true, starts, true,
+                         [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.mult[Effect::UnmodelledMode] = mode_response(l, c); });
+    std::get<UnmodelledMode>(par.fit.parameters).series = false;
+    std::get<UnmodelledMode>(ser.fit.parameters).series = true;
     return ser.V < par.V ? ser : par;
   }
 
@@ -658,7 +785,7 @@ class Diagnosis {
   // replaced by a refitted pole and residue (4 parameters).
   Trial fit_mismatch(const Augment& a) const {
     const Weighted W = weighted(s_, a);
-    Trial best{a, {"mode_mismatch", 0, 0, 4, 1, {}}, cost(s_, W, a.G())};
+    Trial best{a, {0, 0, 4, 1, ModeMismatch{}}, cost(s_, W, a.G())};
     if (model_.order() == 0) return best;
     Eigen::EigenSolver<Eigen::MatrixXd> es(model_.A);
     const Eigen::MatrixXcd V = es.eigenvectors();
@@ -667,7 +794,6 @@ class Diagnosis {
     const Eigen::VectorXcd CV = (model_.C.cast<cplx>() * V).row(0).transpose();
     const Eigen::VectorXcd WB = Wi * model_.B.cast<cplx>();
     const Eigen::VectorXcd mult = a.multiplier();
-    const int K = static_cast<int>(s_.exc.size());
     bool any = false;
     for (Eigen::Index i = 0; i < model_.A.rows(); ++i) {
       const cplx l = es.eigenvalues()(i);
@@ -677,23 +803,17 @@ class Diagnosis {
       for (Eigen::Index k = 0; k < old.size(); ++k)
         old(k) = r / (s_.xi(k) - l) + std::conj(r) / (s_.xi(k) - std::conj(l));
       Augment w = a;
-      w.add["mode_mismatch"] = -old;
+      w.add[Effect::ModeMismatch] = -old;
       const Eigen::VectorXcd G = w.G();
-      Eigen::VectorXcd X(K), R(K);
-      for (int j = 0; j < K; ++j) {
-        X(j) = mult(s_.exc[j]) * W.U(j);
-        R(j) = W.T(j) - G(s_.exc[j]) * W.U(j);
-      }
-      Trial t = fit_pole(w, "mode_mismatch", X, R, false, {l}, false,
+      Eigen::VectorXcd X, R;
+      additive_target(s_, W, mult, G, X, R);
+      Trial t = fit_pole(w, Effect::ModeMismatch, X, R, false, {l}, false,
                          [this, old](Augment& s, cplx lambda, const Eigen::VectorXd& c) {
-                           s.add["mode_mismatch"] = mode_response(lambda, c) - old;
+                           s.add[Effect::ModeMismatch] = mode_response(lambda, c) - old;
                          });
       if (!any || t.V < best.V) {
         any = true;
-        double th, sg;
-        theta_sigma(l, th, sg);
-        t.fit.parameters["model_frequency_hz"] =
-            std::hypot(th, sg) / (2 * M_PI) / (model_.domain == Domain::Discrete ? s_.Ts : 1.0);
+        std::get<ModeMismatch>(t.fit.parameters).model_frequency_hz = resonance(l).frequency_hz;
         best = t;
       }
     }
@@ -712,7 +832,7 @@ class Diagnosis {
     std::vector<int> lines = s_.exc;
     lines.insert(lines.end(), s_.ne.begin(), s_.ne.end());
     const LineStats st = line_stats(s_, a, lines);
-    Trial best{a, {"nonlinearity", 0, 0, 2, 1, {}}, std::numeric_limits<double>::infinity()};
+    Trial best{a, {0, 0, 2, 1, Nonlinearity{}}, std::numeric_limits<double>::infinity()};
     for (int where = 0; where < 2; ++where) {  // 0 output, 1 input
       std::array<Eigen::MatrixXcd, 2> Q = {Eigen::MatrixXcd::Zero(s_.M, L), Eigen::MatrixXcd::Zero(s_.M, L)};
       double scale = 0;
@@ -738,9 +858,8 @@ class Diagnosis {
       w = pooled(w).cwiseInverse() * st.M;  // excited then unexcited lines: pooled within each run
       Eigen::VectorXd c;
       weighted_ls(Phi, st.mean, w, c);
-      Trial t{a, {"nonlinearity", 0, 0, 2, 1, {}}, 0};
       const double a2 = c(0) / std::pow(scale, 2), a3 = c(1) / std::pow(scale, 3);
-      t.fit.parameters = {{"a2", a2}, {"a3", a3}, {"at_input", static_cast<double>(where)}};
+      Trial t{a, {0, 0, 2, 1, Nonlinearity{true, a2, a3, where == 1}}, 0};
       t.state.nl = a2 * Q[0] + a3 * Q[1];
       t.V = line_stats(s_, t.state, s_.exc).pooled_cost;
       if (t.V < best.V) best = t;
@@ -786,10 +905,9 @@ class Diagnosis {
       Eigen::VectorXd w(Lk);
       for (int i = 0; i < Lk; ++i) {
         const int k = s_.all[i];
-        for (int q = 0; q < R; ++q) e(q) = s_.Y(rest[q], k) - G(k) * s_.U(rest[q], k);
-        const cplx m = e.mean();
-        w(i) = (e.array() - m).abs2().sum() / (R - 1) * (1.0 + 1.0 / R);  // variance of d
-        d(i) = s_.Y(p, k) - G(k) * s_.U(p, k) - m;
+        const Moments mo = residual_moments(s_, G, Eigen::MatrixXcd(), k, rest, e);
+        w(i) = mo.var * (1.0 + 1.0 / R);  // variance of d
+        d(i) = s_.Y(p, k) - G(k) * s_.U(p, k) - mo.mean;
       }
       w = pooled(w).cwiseInverse();
       Eigen::VectorXd c;
@@ -894,10 +1012,10 @@ std::vector<bool> benjamini_hochberg(const std::vector<double>& p, double q) {
   return f;
 }
 
-}  // namespace
-
-GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, int inputs, const RecordMeta& meta,
-                       const GapOptions& options) {
+// Input checks of diagnose_gap (see gap.hpp for the conditions).
+// Fails: Error(Input) naming the model, the data, the meta field or the options.
+void check_inputs(const StateSpace& model, const Eigen::MatrixXd& record, int inputs, const RecordMeta& meta,
+                  const GapOptions& options) {
   validate(model);
   if (model.inputs() != 1 || model.outputs() != 1)
     throw Error(ErrorKind::Input, "model", "the gap diagnosis needs a SISO model (1 input, 1 output), got " +
@@ -914,205 +1032,270 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
   if (!(options.alpha > 0 && options.alpha < 1 && options.effect_alpha > 0 && options.effect_alpha < 1 &&
         options.fdr > 0 && options.fdr < 1 && options.min_share >= 0 && options.min_share < 1))
     throw Error(ErrorKind::Input, "options", "levels must lie in (0, 1)");
-  const Spectra s = spectra_of(record, meta, model.domain);
-  if (s.exc.size() < 4)
-    throw Error(ErrorKind::Input, "meta field \"excited_lines\"", "needs at least 4 excited lines below P/2");
-  Diagnosis dg(model, s);
+}
 
-  GapReport rep;
-  rep.options = options;
-  rep.excited = static_cast<int>(s.exc.size());
-  rep.unexcited = static_cast<int>(s.ne.size());
-  const Augment a0 = dg.initial();
-  const LineStats st0 = line_stats(s, a0, s.exc);
-  {
-    // A noise floor must exist: periods identical to rounding give s² ≈ 0.
-    std::vector<double> v(st0.var.data(), st0.var.data() + st0.var.size()), y;
-    for (int k : s.exc) y.push_back(std::norm(s.Y.col(k).mean()));
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    std::nth_element(y.begin(), y.begin() + y.size() / 2, y.end());
-    if (!(v[v.size() / 2] > 1e-24 * y[y.size() / 2]) || !st0.t.allFinite())
-      throw Error(ErrorKind::Input, "data",
-                  "the periods do not vary (sample variance " + std::to_string(v[v.size() / 2]) +
-                      " at the median excited line): no noise floor to measure the gap against; the gap diagnosis "
-                      "needs measured (noisy) periods");
-  }
+// A noise floor must exist: periods identical to rounding give s² ≈ 0.
+// Method: the median over the excited lines of s²(k) against that of |Ȳ(k)|²
+// (relative threshold 1e-24, far below any measured record).
+// Fails: Error(Input) on "data" when s² vanishes or t(k) is not finite.
+void require_noise_floor(const Spectra& s, const LineStats& st0) {
+  std::vector<double> v(st0.var.data(), st0.var.data() + st0.var.size()), y;
+  for (int k : s.exc) y.push_back(std::norm(s.Y.col(k).mean()));
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  std::nth_element(y.begin(), y.begin() + y.size() / 2, y.end());
+  if (!(v[v.size() / 2] > 1e-24 * y[y.size() / 2]) || !st0.t.allFinite())
+    throw Error(ErrorKind::Input, "data",
+                "the periods do not vary (sample variance " + std::to_string(v[v.size() / 2]) +
+                    " at the median excited line): no noise floor to measure the gap against; the gap diagnosis "
+                    "needs measured (noisy) periods");
+}
+
+// The detection tests on the model as given (gap.hpp): the gap and its Fisher
+// combination over the excited lines, the leakage test of the first period,
+// and the nonlinearity test on the unexcited lines inside the band (not
+// testable with fewer than 4 of them: p = 1 and a note).
+void detection_tests(const Diagnosis& dg, const Spectra& s, const Augment& a0, const LineStats& st0, GapReport& rep) {
   rep.gap_before = gap_of(st0);
   rep.p_gap = fisher_p(st0.t, st0.M);
   rep.p_leakage = dg.leakage_p(a0, 0);
   rep.p_nonlinearity = s.ne.size() >= 4 ? fisher_p(line_stats(s, a0, s.ne).t, s.M) : 1.0;
   if (s.ne.size() < 4) rep.notes.push_back("fewer than 4 unexcited lines inside the band: nonlinearity not testable");
+}
 
-  // Bands of the model as given.
-  {
-    std::vector<double> p(s.exc.size());
-    for (size_t i = 0; i < p.size(); ++i) p[i] = f2_survival(st0.t(i), 2 * st0.M - 2);
-    std::vector<bool> flag = benjamini_hochberg(p, options.fdr);
-    if (std::none_of(flag.begin(), flag.end(), [](bool b) { return b; })) {
-      // windows of 8 excited lines, Fisher-combined, then BH over the windows
-      const size_t w = 8;
-      std::vector<double> pw;
-      for (size_t i = 0; i < p.size(); i += w) {
-        const size_t n = std::min(w, p.size() - i);
-        pw.push_back(fisher_p(st0.t.segment(i, n), st0.M));
-      }
-      const std::vector<bool> fw = benjamini_hochberg(pw, options.fdr);
-      for (size_t i = 0; i < p.size(); ++i) flag[i] = fw[i / w];
+// Bands of the model as given: the flags and the bands of rep (gap.hpp).
+// Method: Benjamini–Hochberg at `fdr` over p(k) = P(F(2, 2M−2) > t(k)); when
+// no line is flagged, over windows of 8 excited lines (Fisher-combined)
+// instead. Flagged lines within two excited lines of each other form a band.
+void gap_bands(const Spectra& s, const LineStats& st0, double fdr, GapReport& rep) {
+  std::vector<double> p(s.exc.size());
+  for (size_t i = 0; i < p.size(); ++i) p[i] = f2_survival(st0.t(i), 2 * st0.M - 2);
+  std::vector<bool> flag = benjamini_hochberg(p, fdr);
+  if (std::none_of(flag.begin(), flag.end(), [](bool b) { return b; })) {
+    const size_t w = 8;
+    std::vector<double> pw;
+    for (size_t i = 0; i < p.size(); i += w) {
+      const size_t n = std::min(w, p.size() - i);
+      pw.push_back(fisher_p(st0.t.segment(i, n), st0.M));
     }
-    rep.flagged = flag;
-    for (size_t i = 0; i < flag.size();) {
-      if (!flag[i]) {
-        ++i;
-        continue;
-      }
-      size_t j = i, last = i;
-      while (j < flag.size() && j <= last + 2) {
-        if (flag[j]) last = j;
-        ++j;
-      }
-      rep.bands.push_back({s.hz(s.exc[i]), s.hz(s.exc[last])});
-      i = last + 1;
-    }
+    const std::vector<bool> fw = benjamini_hochberg(pw, fdr);
+    for (size_t i = 0; i < p.size(); ++i) flag[i] = fw[i / w];
   }
+  rep.flagged = flag;
+  for (size_t i = 0; i < flag.size();) {
+    if (!flag[i]) {
+      ++i;
+      continue;
+    }
+    size_t j = i, last = i;
+    while (j < flag.size() && j <= last + 2) {
+      if (flag[j]) last = j;
+      ++j;
+    }
+    rep.bands.push_back({s.hz(s.exc[i]), s.hz(s.exc[last])});
+    i = last + 1;
+  }
+}
 
-  // Every effect alone on the model as given.
-  const double V0 = st0.pooled_cost;
-  for (const char* e : kLinearEffects) {
+// Every linear effect and the nonlinearity, each alone on the model as given:
+// gap after, and p-value (the F-test against the pooled cost V0 for a linear
+// effect; the nonlinearity test for the nonlinearity).
+std::vector<EffectFit> fits_alone(const Diagnosis& dg, const Spectra& s, const Augment& a0, double V0,
+                                  double p_nonlinearity) {
+  std::vector<EffectFit> fits;
+  for (Effect e : kLinearEffects) {
     Trial t = dg.fit(e, a0);
     t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
     t.fit.p_value = dg.f_test(V0, line_stats(s, t.state, s.exc).pooled_cost, t.fit.dof, t.fit.dof);
-    rep.candidates.push_back(t.fit);
+    fits.push_back(t.fit);
   }
-  {
-    Trial t = dg.fit_nonlinearity(a0);
-    t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
-    t.fit.p_value = rep.p_nonlinearity;
-    rep.candidates.push_back(t.fit);
-  }
-  // Leakage: drop the periods the period-deviation test flags.
-  int drop = 0;
-  for (double p = rep.p_leakage; s.M - drop - 1 >= 4 && p < options.alpha;)  // p = leakage_p(a0, drop)
-    if (s.M - ++drop - 1 >= 4) p = dg.leakage_p(a0, drop);
-  // The transient decays geometrically: the first period the test passes still
-  // carries some of it. One more period goes when at least 4 remain after it.
-  if (drop > 0 && s.M - drop - 1 >= 4) ++drop;
-  {
-    Augment a = a0;
-    a.first = std::max(drop, 1);
-    EffectFit f{"leakage", gap_of(line_stats(s, a, s.exc)), 0, 0, rep.p_leakage,
-                {{"transient_periods", static_cast<double>(a.first)}}};
-    rep.candidates.push_back(f);
-  }
-  for (EffectFit& f : rep.candidates) f.shrink = 1.0 - f.gap_after / rep.gap_before;
-  std::stable_sort(rep.candidates.begin(), rep.candidates.end(),
-                   [](const EffectFit& a, const EffectFit& b) { return a.gap_after < b.gap_after; });
+  Trial t = dg.fit_nonlinearity(a0);
+  t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
+  t.fit.p_value = p_nonlinearity;
+  fits.push_back(t.fit);
+  return fits;
+}
 
-  // The chosen set: leakage and nonlinearity by their own tests, then the
-  // linear effects: the best single (BIC) if its F-test and relevance rule
-  // pass, then the best pair (joint fit) if it beats that single likewise.
+// Leakage: how many leading periods carry a transient. Method: drop periods
+// while the period-deviation test (Diagnosis::leakage_p) of the first kept
+// one rejects at `alpha` and at least 4 later periods remain; the transient
+// decays geometrically, so the first period that passes still carries some of
+// it: one more goes when at least 4 remain after it.
+int transient_periods(const Diagnosis& dg, const Spectra& s, const Augment& a0, double p_leakage, double alpha) {
+  int drop = 0;
+  for (double p = p_leakage; s.M - drop - 1 >= 4 && p < alpha;)  // p = leakage_p(a0, drop)
+    if (s.M - ++drop - 1 >= 4) p = dg.leakage_p(a0, drop);
+  if (drop > 0 && s.M - drop - 1 >= 4) ++drop;
+  return drop;
+}
+
+// The leakage candidate: the gap with the transient periods (at least one) left out.
+EffectFit leakage_alone(const Spectra& s, const Augment& a0, int drop, double p_leakage) {
+  Augment a = a0;
+  a.first = std::max(drop, 1);
+  return {gap_of(line_stats(s, a, s.exc)), 0, 0, p_leakage, Leakage{a.first}};
+}
+
+// t(k) after one more stage: labels accumulate ("+ leakage", "+ leakage + nonlinearity", …).
+void add_step(const Spectra& s, const std::string& base, const std::string& what, const Augment& a, GapReport& rep) {
+  rep.steps.emplace_back(base == "model" ? "+ " + what : base + " + " + what, line_stats(s, a, s.exc).t);
+}
+
+// The first stages of the chosen set, each by its own test: leakage (the
+// transient periods dropped) and nonlinearity (fitted when the test on the
+// unexcited lines rejects at alpha with those periods dropped). Returns the
+// state and, through `nonlinear`, whether the nonlinearity was admitted.
+Augment choose_leakage_and_nonlinearity(const Diagnosis& dg, const Spectra& s, const Augment& a0, int drop,
+                                        double alpha, GapReport& rep, bool& nonlinear) {
   Augment cur = a0;
-  rep.steps.emplace_back("model", st0.t);
-  // Stage labels accumulate: "+ leakage", "+ leakage + nonlinearity", ...
-  auto add_step = [&](const std::string& base, const std::string& what, const Augment& a) {
-    rep.steps.emplace_back(base == "model" ? "+ " + what : base + " + " + what, line_stats(s, a, s.exc).t);
-  };
   if (drop > 0) {
     cur.first = drop;
-    rep.chosen.push_back({"leakage", 0, 0, 0, rep.p_leakage, {{"transient_periods", static_cast<double>(drop)}}});
-    add_step(rep.steps.back().first, "leakage", cur);
+    rep.chosen.push_back({0, 0, 0, rep.p_leakage, Leakage{drop}});
+    add_step(s, rep.steps.back().first, to_string(Effect::Leakage), cur, rep);
   }
-  bool nonlinear = false;
+  nonlinear = false;
   if (s.ne.size() >= 4) {
     const double p = fisher_p(line_stats(s, cur, s.ne).t, s.M - cur.first);
-    if (p < options.alpha) {
+    if (p < alpha) {
       nonlinear = true;
       Trial t = dg.fit_nonlinearity(cur);
       t.fit.p_value = p;
       cur = t.state;
       rep.chosen.push_back(t.fit);
-      add_step(rep.steps.back().first, "nonlinearity", cur);
+      add_step(s, rep.steps.back().first, to_string(Effect::Nonlinearity), cur, rep);
     }
   }
-  {
+  return cur;
+}
+
+// A set of linear effects fitted jointly on a state, as the selection weighs it.
+struct Choice {
+  std::vector<Effect> set;
+  Augment state;
+  std::vector<EffectFit> fits;
+  double V = std::numeric_limits<double>::infinity();  // pooled cost after the set
+  int q = 0;                                            // real parameters of the set
+};
+
+// The selection of the linear effects on top of a state `cur` (leakage and
+// nonlinearity already in): the best single effect by BIC V + penalty · q, and
+// the best pair. Nonlinear distortion, when admitted, is refitted after each set.
+class LinearSelection {
+ public:
+  LinearSelection(const Diagnosis& dg, const Spectra& s, const Augment& cur, bool nonlinear, const GapOptions& o)
+      : dg_(dg), s_(s), cur_(cur), nonlinear_(nonlinear), o_(o) {
     const LineStats st = line_stats(s, cur, s.exc);
-    const double Vc = st.pooled_cost, gc = gap_of(st);
+    Vc_ = st.pooled_cost;
+    gc_ = gap_of(st);
     // Relevance floor: 3 standard deviations of the gap under H0,
     // sd = √(var F(2, d)) / mean F(2, d) / √K with d = 2M − 2.
     const double d = 2.0 * st.M - 2, mean_f = d / (d - 2), var_f = d * d * d / ((d - 2) * (d - 2) * (d - 4));
-    const double floor = 3 * std::sqrt(var_f) / mean_f / std::sqrt(static_cast<double>(s.exc.size()));
-    auto relevant = [&](double g_from, double g_to) { return g_from - g_to >= options.min_share * std::max(g_from - 1, floor); };
-    auto refit_nl = [&](Augment& a) {
-      if (nonlinear) a.nl = dg.fit_nonlinearity(a).state.nl;
-    };
-    struct Choice {
-      std::vector<std::string> set;
-      Augment state;
-      std::vector<EffectFit> fits;
-      double V = std::numeric_limits<double>::infinity();
-      int q = 0;
-      double score() const { return V; }
-    };
-    auto evaluate = [&](const std::vector<std::string>& set) {
-      Choice c;
-      c.set = set;
-      std::tie(c.state, c.fits) = dg.fit_set(set, cur, c.V);
-      refit_nl(c.state);
-      c.V = line_stats(s, c.state, s.exc).pooled_cost;
-      for (const EffectFit& f : c.fits) c.q += f.dof;
-      return c;
-    };
-    auto bic = [&](const Choice& c) { return c.V + dg.penalty() * c.q; };
+    floor_ = 3 * std::sqrt(var_f) / mean_f / std::sqrt(static_cast<double>(s.exc.size()));
+  }
+
+  // The accepted sets, in order: none; the single; or the single and then the
+  // pair that replaced it.
+  // Method: the best single (BIC) is admitted when its F-test against the
+  // current state rejects at effect_alpha and it is relevant; then the best
+  // pair (joint fit, BIC) when it beats the single by BIC, its nested F-test
+  // against the better of its own two members rejects, and it is relevant.
+  std::vector<Choice> run() const {
     Choice best1;
-    std::map<std::string, Choice> singles;
-    for (const char* e : kLinearEffects) {
+    std::map<Effect, Choice> singles;
+    for (Effect e : kLinearEffects) {
       Choice c = evaluate({e});
       singles[e] = c;
       if (bic(c) < bic(best1)) best1 = c;
     }
     std::vector<Choice> accepted;
-    if (std::isfinite(best1.V)) {
-      const double p1 = dg.f_test(Vc, best1.V, best1.q, best1.q);
-      const double g1 = gap_of(line_stats(s, best1.state, s.exc));
-      if (p1 < options.effect_alpha && relevant(gc, g1)) {
-        best1.fits[0].p_value = p1;
-        best1.fits[0].gap_after = g1;
-        accepted.push_back(best1);
-        Choice best2;
-        for (size_t i = 0; i < std::size(kLinearEffects); ++i)
-          for (size_t j = i + 1; j < std::size(kLinearEffects); ++j) {
-            Choice c = evaluate({kLinearEffects[i], kLinearEffects[j]});
-            if (bic(c) < bic(best2)) best2 = c;
-          }
-        if (std::isfinite(best2.V) && bic(best2) < bic(best1)) {
-          // Nested test: the pair against the better of its own two members.
-          const Choice& a = singles[best2.set[0]];
-          const Choice& b = singles[best2.set[1]];
-          const Choice& sub = bic(a) < bic(b) ? a : b;
-          const double p2 = dg.f_test(sub.V, best2.V, std::max(1, best2.q - sub.q), best2.q);
-          const double gs = gap_of(line_stats(s, sub.state, s.exc));
-          const double g2 = gap_of(line_stats(s, best2.state, s.exc));
-          if (p2 < options.effect_alpha && relevant(gs, g2)) {
-            for (EffectFit& f : best2.fits) {
-              f.p_value = p2;
-              f.gap_after = g2;
-            }
-            accepted.push_back(best2);
-          }
+    if (!std::isfinite(best1.V)) return accepted;
+    const double p1 = dg_.f_test(Vc_, best1.V, best1.q, best1.q);
+    const double g1 = gap_of(line_stats(s_, best1.state, s_.exc));
+    if (!(p1 < o_.effect_alpha && relevant(gc_, g1))) return accepted;
+    best1.fits[0].p_value = p1;
+    best1.fits[0].gap_after = g1;
+    accepted.push_back(best1);
+    Choice best2 = best_pair();
+    if (std::isfinite(best2.V) && bic(best2) < bic(best1)) {
+      const Choice& a = singles[best2.set[0]];
+      const Choice& b = singles[best2.set[1]];
+      const Choice& sub = bic(a) < bic(b) ? a : b;
+      const double p2 = dg_.f_test(sub.V, best2.V, std::max(1, best2.q - sub.q), best2.q);
+      const double gs = gap_of(line_stats(s_, sub.state, s_.exc));
+      const double g2 = gap_of(line_stats(s_, best2.state, s_.exc));
+      if (p2 < o_.effect_alpha && relevant(gs, g2)) {
+        for (EffectFit& f : best2.fits) {
+          f.p_value = p2;
+          f.gap_after = g2;
         }
+        accepted.push_back(best2);
       }
     }
-    if (!accepted.empty()) {
-      cur = accepted.back().state;
-      for (const EffectFit& f : accepted.back().fits) rep.chosen.push_back(f);
-      // The single, then the pair that replaced it (both from the same base).
-      const std::string base = rep.steps.back().first;
-      for (const Choice& c : accepted) {
-        std::string what;
-        for (const std::string& e : c.set) what += (what.empty() ? "" : " + ") + e;
-        add_step(base, what, c.state);
-      }
-    }
+    return accepted;
   }
+
+ private:
+  // The set fitted jointly on the current state (Diagnosis::fit_set), the
+  // nonlinearity refitted when admitted, and its pooled cost.
+  Choice evaluate(const std::vector<Effect>& set) const {
+    Choice c;
+    c.set = set;
+    std::tie(c.state, c.fits) = dg_.fit_set(set, cur_, c.V);
+    if (nonlinear_) c.state.nl = dg_.fit_nonlinearity(c.state).state.nl;
+    c.V = line_stats(s_, c.state, s_.exc).pooled_cost;
+    for (const EffectFit& f : c.fits) c.q += f.dof;
+    return c;
+  }
+  // The best pair of distinct linear effects by BIC.
+  Choice best_pair() const {
+    Choice best2;
+    for (size_t i = 0; i < kLinearEffects.size(); ++i)
+      for (size_t j = i + 1; j < kLinearEffects.size(); ++j) {
+        Choice c = evaluate({kLinearEffects[i], kLinearEffects[j]});
+        if (bic(c) < bic(best2)) best2 = c;
+      }
+    return best2;
+  }
+  double bic(const Choice& c) const { return c.V + dg_.penalty() * c.q; }
+  // The relevance rule: the step must remove min_share of the current excess
+  // gap (or of the floor, when the excess is below it).
+  bool relevant(double g_from, double g_to) const {
+    return g_from - g_to >= o_.min_share * std::max(g_from - 1, floor_);
+  }
+
+  const Diagnosis& dg_;
+  const Spectra& s_;
+  const Augment& cur_;
+  bool nonlinear_;
+  const GapOptions& o_;
+  double Vc_ = 0, gc_ = 0, floor_ = 0;
+};
+
+// The chosen set (gap.hpp): leakage and nonlinearity by their own tests, then
+// the linear effects by LinearSelection. Fills rep.chosen and rep.steps;
+// returns the final state.
+Augment choose_effects(const Diagnosis& dg, const Spectra& s, const Augment& a0, const LineStats& st0, int drop,
+                       const GapOptions& options, GapReport& rep) {
+  rep.steps.emplace_back("model", st0.t);
+  bool nonlinear = false;
+  Augment cur = choose_leakage_and_nonlinearity(dg, s, a0, drop, options.alpha, rep, nonlinear);
+  const std::vector<Choice> accepted = LinearSelection(dg, s, cur, nonlinear, options).run();
+  if (accepted.empty()) return cur;
+  for (const EffectFit& f : accepted.back().fits) rep.chosen.push_back(f);
+  // The single, then the pair that replaced it (both from the same base).
+  const std::string base = rep.steps.back().first;
+  for (const Choice& c : accepted) {
+    std::string what;
+    for (Effect e : c.set) what += (what.empty() ? "" : " + ") + std::string(to_string(e));
+    add_step(s, base, what, c.state, rep);
+  }
+  return accepted.back().state;
+}
+
+// The report's conclusion from the final state `cur`: gap after, each chosen
+// effect's shrink, "present" (largest shrink alone first; ties by name), the
+// bands cleared when nothing is present and the gap test passes, and the
+// plot table.
+void conclude(const Spectra& s, const LineStats& st0, const Augment& cur, const GapOptions& options, GapReport& rep) {
   rep.periods_used = s.M - cur.first;
   const LineStats st1 = line_stats(s, cur, s.exc);
   rep.gap_after = gap_of(st1);
@@ -1120,37 +1303,79 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
     if (f.gap_after == 0) f.gap_after = rep.gap_after;
     f.shrink = 1.0 - f.gap_after / rep.gap_before;
   }
-  // "present", largest first: by the shrink of the effect alone.
-  std::vector<std::pair<double, std::string>> order;
+  std::vector<std::pair<double, Effect>> order;
   for (const EffectFit& f : rep.chosen)
     for (const EffectFit& c : rep.candidates)
-      if (c.effect == f.effect) order.emplace_back(-c.shrink, f.effect);
-  std::stable_sort(order.begin(), order.end());
+      if (c.effect() == f.effect()) order.emplace_back(-c.shrink, f.effect());
+  std::stable_sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
+    return a.first < b.first || (!(b.first < a.first) && ByName()(a.second, b.second));
+  });
   for (const auto& o : order) rep.present.push_back(o.second);
   if (rep.present.empty()) {
     rep.gap_after = rep.gap_before;
     if (rep.p_gap >= options.alpha) rep.bands.clear();
   }
-
   const Eigen::Index K = static_cast<Eigen::Index>(s.exc.size());
   rep.frequency.resize(K);
   for (Eigen::Index i = 0; i < K; ++i) rep.frequency(i) = s.hz(s.exc[i]);
   rep.t_before = st0.t;
   rep.t_after = rep.present.empty() ? st0.t : st1.t;
+}
+
+}  // namespace
+
+/// Sim-to-real gap diagnosis (gap.hpp; CONTRACTS.md `fdsid gap`).
+///
+/// Method: the per-period DFT of the record; t(k) and the gap of the model as
+/// given (Pintelon 2002, Eq. 25); the detection tests and the bands; every
+/// effect fitted alone (the candidates); the chosen set by the tests and the
+/// relevance rule; the report.
+/// Numerical aspects: cost dominated by the joint fits of the 15 linear pairs,
+/// each O(K) per cost evaluation over a few hundred Nelder–Mead/Brent steps.
+/// Fails: Error(Input) as stated in gap.hpp.
+/// References: Pintelon, Guillaume, Schoukens et al. (2002); Benjamini &
+/// Hochberg (1995); Fisher (1932).
+GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, int inputs, const RecordMeta& meta,
+                       const GapOptions& options) {
+  check_inputs(model, record, inputs, meta, options);
+  const Spectra s = spectra_of(record, meta, model.domain);
+  if (s.exc.size() < 4)
+    throw Error(ErrorKind::Input, "meta field \"excited_lines\"", "needs at least 4 excited lines below P/2");
+  const Diagnosis dg(model, s);
+  GapReport rep;
+  rep.options = options;
+  rep.excited = static_cast<int>(s.exc.size());
+  rep.unexcited = static_cast<int>(s.ne.size());
+  const Augment a0 = dg.initial();
+  const LineStats st0 = line_stats(s, a0, s.exc);
+  require_noise_floor(s, st0);
+  detection_tests(dg, s, a0, st0, rep);
+  gap_bands(s, st0, options.fdr, rep);
+
+  rep.candidates = fits_alone(dg, s, a0, st0.pooled_cost, rep.p_nonlinearity);
+  const int drop = transient_periods(dg, s, a0, rep.p_leakage, options.alpha);
+  rep.candidates.push_back(leakage_alone(s, a0, drop, rep.p_leakage));
+  for (EffectFit& f : rep.candidates) f.shrink = 1.0 - f.gap_after / rep.gap_before;
+  std::stable_sort(rep.candidates.begin(), rep.candidates.end(),
+                   [](const EffectFit& a, const EffectFit& b) { return a.gap_after < b.gap_after; });
+
+  const Augment cur = choose_effects(dg, s, a0, st0, drop, options, rep);
+  conclude(s, st0, cur, options, rep);
   return rep;
 }
 
 nlohmann::json gap_report_to_json(const GapReport& r) {
   auto fit_json = [](const EffectFit& f) {
     nlohmann::json p = nlohmann::json::object();
-    for (const auto& kv : f.parameters) p[kv.first] = kv.second;
-    return nlohmann::json{{"effect", f.effect}, {"gap_after", f.gap_after}, {"shrink", f.shrink},
+    for (const auto& kv : parameter_list(f.parameters)) p[kv.first] = kv.second;
+    return nlohmann::json{{"effect", to_string(f.effect())}, {"gap_after", f.gap_after}, {"shrink", f.shrink},
                           {"parameters", p},     {"dof", f.dof},            {"p_value", f.p_value}};
   };
   nlohmann::json j;
   j["gap_before"] = r.gap_before;
   j["gap_after"] = r.gap_after;
-  j["present"] = r.present;
+  j["present"] = nlohmann::json::array();
+  for (Effect e : r.present) j["present"].push_back(to_string(e));
   j["bands"] = nlohmann::json::array();
   for (const auto& b : r.bands) j["bands"].push_back({b[0], b[1]});
   j["candidates"] = nlohmann::json::array();

@@ -23,12 +23,6 @@ const char* to_string(Strength s) {
   return "?";
 }
 
-const std::vector<std::string>& gap_effect_names() {
-  static const std::vector<std::string> names = {"gain_error",    "delay",        "sensor_dynamics", "unmodelled_mode",
-                                                 "mode_mismatch", "nonlinearity", "leakage"};
-  return names;
-}
-
 std::array<double, 2> gap_ratio_range(Strength s) {
   switch (s) {
     case Strength::Subtle: return {0.5, 3.0};
@@ -215,11 +209,8 @@ class Fft {
 // ---------------------------------------------------------------------------
 // Effects: parameters drawn at magnitude 1, scaled by `scale` ∈ [0, scale_max]
 // (scale 0 is always the identity).
-enum class Kind { Gain, Delay, Sensor, Unmodelled, Mismatch, Nonlinear, Leakage };
-
-struct Effect {
-  std::string name;
-  Kind kind = Kind::Gain;
+struct Injected {
+  Effect effect = Effect::GainError;
   double scale = 1, scale_max = 1, target = 0, ratio = 0;
   double gain0 = 1;                                    // gain_error: g = 1 + s (g0 − 1)
   double delay0 = 0;                                   // delay: τ = s τ0
@@ -236,25 +227,19 @@ struct Effect {
   std::vector<double> line_ratio;                      // per line, at the final scale
 };
 
-Kind kind_of(const std::string& name) {
-  static const std::pair<const char*, Kind> table[] = {
-      {"gain_error", Kind::Gain},       {"delay", Kind::Delay},           {"sensor_dynamics", Kind::Sensor},
-      {"unmodelled_mode", Kind::Unmodelled}, {"mode_mismatch", Kind::Mismatch}, {"nonlinearity", Kind::Nonlinear},
-      {"leakage", Kind::Leakage}};
-  for (const auto& [n, k] : table)
-    if (name == n) return k;
-  std::string list;
-  for (const auto& n : gap_effect_names()) list += (list.empty() ? "" : ", ") + n;
-  throw Error(ErrorKind::Input, kWhere, "unknown effect '" + name + "' (known: " + list + ")");
-}
+/// A static polynomial x + a₂ x²/r + a₃ x³/r² (r a reference RMS); off: the identity.
+struct StaticPolynomial {
+  bool on = false;
+  double a2 = 0, a3 = 0, r = 1;
+  double operator()(double x) const { return x + a2 * x * x / r + a3 * x * x * x / (r * r); }
+};
 
 /// The true system: u → f_in → plant → f_out → sensor → gain → delay.
 struct Chain {
   std::vector<Section> parallel;  // plant = D + Σ parallel, then × Π series
   std::vector<Section> series;
   double D = 0;
-  bool in_nl = false, out_nl = false;
-  double in_a2 = 0, in_a3 = 0, in_r = 1, out_a2 = 0, out_a3 = 0, out_r = 1;
+  StaticPolynomial in_nl, out_nl;  // f_in, f_out
   std::vector<Section> sensor;
   double gain = 1, delay = 0, leak = 0;
 
@@ -285,18 +270,16 @@ struct Chain {
   }
 };
 
-double poly(double x, double a2, double a3, double r) { return x + a2 * x * x / r + a3 * x * x * x / (r * r); }
-
-Chain make_chain(const Base& base, const std::vector<const Effect*>& effects) {
+Chain make_chain(const Base& base, const std::vector<const Injected*>& effects) {
   std::vector<Mode> modes = base.modes;
   Chain c;
   c.D = base.D;
-  for (const Effect* e : effects) {
+  for (const Injected* e : effects) {
     const double s = e->scale;
-    switch (e->kind) {
-      case Kind::Gain: c.gain *= 1 + s * (e->gain0 - 1); break;
-      case Kind::Delay: c.delay += s * e->delay0; break;
-      case Kind::Sensor: {
+    switch (e->effect) {
+      case Effect::GainError: c.gain *= 1 + s * (e->gain0 - 1); break;
+      case Effect::Delay: c.delay += s * e->delay0; break;
+      case Effect::SensorDynamics: {
         const double T = s * e->time_constant0;
         if (T <= 0) break;
         const double wc = 1 / T;
@@ -314,7 +297,7 @@ Chain make_chain(const Base& base, const std::vector<const Effect*>& effects) {
         c.sensor.push_back(sec);
         break;
       }
-      case Kind::Unmodelled:
+      case Effect::UnmodelledMode:
         if (e->series) {
           const cplx p = resonance_pole(e->extra_omega, e->extra_zeta);
           const cplx z = resonance_pole(e->extra_omega, e->extra_zeta * (1 + s * e->kappa0));
@@ -333,24 +316,14 @@ Chain make_chain(const Base& base, const std::vector<const Effect*>& effects) {
           c.parallel.push_back(m.section());
         }
         break;
-      case Kind::Mismatch:
+      case Effect::ModeMismatch:
         modes[static_cast<std::size_t>(e->mode)].omega *= 1 + s * e->shift0;
         modes[static_cast<std::size_t>(e->mode)].zeta *= std::exp(s * e->damping_log0);
         break;
-      case Kind::Nonlinear:
-        if (e->at_input) {
-          c.in_nl = true;
-          c.in_a2 = s * e->quad0;
-          c.in_a3 = s * e->cubic0;
-          c.in_r = e->reference_rms;
-        } else {
-          c.out_nl = true;
-          c.out_a2 = s * e->quad0;
-          c.out_a3 = s * e->cubic0;
-          c.out_r = e->reference_rms;
-        }
+      case Effect::Nonlinearity:
+        (e->at_input ? c.in_nl : c.out_nl) = StaticPolynomial{true, s * e->quad0, s * e->cubic0, e->reference_rms};
         break;
-      case Kind::Leakage: c.leak = s; break;
+      case Effect::Leakage: c.leak = s; break;
     }
   }
   for (const Mode& m : modes) c.parallel.push_back(m.section());
@@ -382,15 +355,15 @@ struct Setting {
 std::vector<cplx> steady(const Chain& c, const Setting& st, Fft& fft, bool with_delay) {
   const std::size_t bins = st.U.size();
   std::vector<cplx> X = st.U;
-  if (c.in_nl) {
+  if (c.in_nl.on) {
     std::vector<double> x = st.u;
-    for (double& v : x) v = poly(v, c.in_a2, c.in_a3, c.in_r);
+    for (double& v : x) v = c.in_nl(v);
     X = fft.forward(x.data());
   }
   for (std::size_t k = 0; k < bins; ++k) X[k] *= c.plant_at(st.q[k]);
-  if (c.out_nl) {
+  if (c.out_nl.on) {
     std::vector<double> x = fft.inverse(X);
-    for (double& v : x) v = poly(v, c.out_a2, c.out_a3, c.out_r);
+    for (double& v : x) v = c.out_nl(v);
     X = fft.forward(x.data());
   }
   for (std::size_t k = 0; k < bins; ++k) X[k] *= c.meas_at(st.omega[k], st.q[k], with_delay);
@@ -403,11 +376,11 @@ std::vector<double> transient(const Chain& c, const Setting& st, const std::vect
   const std::size_t P = static_cast<std::size_t>(st.P), N = P * static_cast<std::size_t>(periods);
   std::vector<double> x(N), y, tmp;
   for (std::size_t t = 0; t < N; ++t) x[t] = st.u[t % P];
-  if (c.in_nl)
-    for (double& v : x) v = poly(v, c.in_a2, c.in_a3, c.in_r);
+  if (c.in_nl.on)
+    for (double& v : x) v = c.in_nl(v);
   c.plant_filter(x, y);
-  if (c.out_nl)
-    for (double& v : y) v = poly(v, c.out_a2, c.out_a3, c.out_r);
+  if (c.out_nl.on)
+    for (double& v : y) v = c.out_nl(v);
   for (const Section& s : c.sensor) {
     s.filter(y, tmp);
     y.swap(tmp);
@@ -460,15 +433,15 @@ class Calibrator {
  public:
   Calibrator(const Base& base, const Setting& st, Fft& fft) : base_(base), st_(st), fft_(fft) {}
 
-  double deviation(const Effect& e, double s, std::vector<double>* per_line = nullptr) {
-    Effect es = e;
+  double deviation(const Injected& e, double s, std::vector<double>* per_line = nullptr) {
+    Injected es = e;
     es.scale = s;
     std::vector<double> r;
-    switch (e.kind) {
-      case Kind::Nonlinear: {
+    switch (e.effect) {
+      case Effect::Nonlinearity: {
         std::vector<double> x = e.at_input ? st_.u : st_.y_sim;
-        const double a2 = s * e.quad0, a3 = s * e.cubic0;
-        for (double& v : x) v = poly(v, a2, a3, e.reference_rms);
+        const StaticPolynomial f{true, s * e.quad0, s * e.cubic0, e.reference_rms};
+        for (double& v : x) v = f(v);
         const std::vector<cplx> X = fft_.forward(x.data());
         for (int k : st_.unexcited_band) {
           const cplx y = e.at_input ? st_.Hsim[static_cast<std::size_t>(k)] * X[static_cast<std::size_t>(k)]
@@ -477,7 +450,7 @@ class Calibrator {
         }
         break;
       }
-      case Kind::Leakage: {
+      case Effect::Leakage: {
         if (T1_.empty()) {
           const Chain c = make_chain(base_, {});
           const std::vector<double> tr = transient(c, st_, st_.y_sim, 1);
@@ -501,8 +474,8 @@ class Calibrator {
     return A;
   }
 
-  const std::vector<int>& lines(const Effect& e) const {
-    return e.kind == Kind::Nonlinear ? st_.unexcited_band : e.kind == Kind::Leakage ? st_.band : st_.excited;
+  const std::vector<int>& lines(const Injected& e) const {
+    return e.effect == Effect::Nonlinearity ? st_.unexcited_band : e.effect == Effect::Leakage ? st_.band : st_.excited;
   }
 
  private:
@@ -592,18 +565,91 @@ Base draw_system(Draw& d, double w_lo, double w_hi) {
   return b;
 }
 
-void draw_effect(Effect& e, Draw& d, Strength strength, const Base& base, const Setting& st, double w_lo,
+// unmodelled_mode: the frequency log-uniform over the band, at least 12 %
+// away from every model mode (the best of 200 tries), ζ log-uniform on
+// [0.01, 0.1], then series (a unit-DC-gain bump of peak ratio 1 + s κ0) or
+// parallel (a residue of size ρ relative to the model at that frequency).
+void draw_unmodelled_mode(Injected& e, Draw& d, bool clear, const Base& base, const Setting& st, double w_lo,
+                          double w_band) {
+  const double l0 = std::log(std::max(w_lo, kTwoPi * 2 / st.P)), l1 = std::log(0.95 * w_band);
+  double best = 0, best_sep = -1;
+  for (int tries = 0; tries < 200; ++tries) {
+    const double w = std::exp(d.uniform(l0, l1));
+    double sep = 1e300;
+    for (const Mode& m : base.modes) sep = std::min(sep, std::abs(std::log(w / m.omega)));
+    if (sep > best_sep) {
+      best_sep = sep;
+      best = w;
+    }
+    if (sep >= std::log(1.12)) break;
+  }
+  e.extra_omega = best;
+  e.extra_zeta = d.log_uniform(0.01, 0.1);
+  e.series = d.coin();
+  if (e.series) {
+    e.kappa0 = clear ? d.log_uniform(0.5, 3.0) : d.log_uniform(0.02, 0.1);
+    e.scale_max = std::min(20.0, 0.95 / e.extra_zeta - 1) / e.kappa0;
+  } else {
+    const double rho = clear ? d.log_uniform(0.2, 1.0) : d.log_uniform(0.01, 0.05);
+    const cplx unit = d.sign() * std::polar(1.0, -kPi / 2 + d.uniform(-0.4, 0.4));
+    const cplx qm = std::polar(1.0, -best);
+    const double unit_peak = std::abs(Mode{best, e.extra_zeta, unit}.section().at(qm));
+    Chain sim = make_chain(base, {});
+    e.extra_residue0 = unit * rho * std::abs(sim.plant_at(qm)) / unit_peak;
+    e.scale_max = 5.0 / rho;
+  }
+}
+
+// mode_mismatch: a random model mode; its frequency, damping or both moved
+// (ω' = ω (1 + s δ0), ζ' = ζ e^{s λ0}); scale_max keeps ω' below 0.95 π and
+// ζ' within [0.002, 0.7].
+void draw_mode_mismatch(Injected& e, Draw& d, bool clear, const Base& base) {
+  e.mode = d.integer(0, static_cast<int>(base.modes.size()) - 1);
+  const Mode& m = base.modes[static_cast<std::size_t>(e.mode)];
+  const double u = d.unit();
+  const int type = u < 0.4 ? 0 : u < 0.6 ? 1 : 2;  // frequency, damping, both
+  if (type != 1) e.shift0 = d.sign() * (clear ? d.uniform(0.02, 0.08) : d.uniform(0.002, 0.01));
+  if (type != 0)
+    e.damping_log0 = d.sign() * (clear ? d.uniform(std::log(1.4), std::log(2.5)) : d.uniform(std::log(1.03), std::log(1.1)));
+  double smax = 1e300;
+  if (e.shift0 != 0) smax = std::min(smax, 0.25 / std::abs(e.shift0));
+  if (e.shift0 > 0) smax = std::min(smax, (0.95 * kPi / m.omega - 1) / e.shift0);
+  if (e.damping_log0 > 0) smax = std::min(smax, std::log(0.7 / m.zeta) / e.damping_log0);
+  if (e.damping_log0 < 0) smax = std::min(smax, std::log(0.002 / m.zeta) / e.damping_log0);
+  e.scale_max = std::max(1.0, smax);
+}
+
+// nonlinearity: at the input or the output, quadratic, cubic or both, each
+// coefficient of random sign and log-uniform size, relative to the RMS of
+// the signal it acts on.
+void draw_nonlinearity(Injected& e, Draw& d, bool clear, const Setting& st) {
+  e.at_input = d.coin();
+  const double u = d.unit();
+  const int type = u < 1.0 / 3 ? 0 : u < 2.0 / 3 ? 1 : 2;  // quadratic, cubic, both
+  auto coef = [&] { return d.sign() * (clear ? d.log_uniform(0.02, 0.1) : d.log_uniform(0.002, 0.01)); };
+  if (type != 1) e.quad0 = coef();
+  if (type != 0) e.cubic0 = coef();
+  double ss = 0;
+  const std::vector<double>& x = e.at_input ? st.u : st.y_sim;
+  for (double v : x) ss += v * v;
+  e.reference_rms = std::sqrt(ss / static_cast<double>(x.size()));
+  e.scale_max = 0.5 / std::max(std::abs(e.quad0), std::abs(e.cubic0));
+}
+
+// One effect's physical parameters at magnitude 1 for the strength, and the
+// largest magnitude scale_max its physical bounds allow (see each draw).
+void draw_effect(Injected& e, Draw& d, Strength strength, const Base& base, const Setting& st, double w_lo,
                  double w_band) {
   const bool clear = strength == Strength::Clear;
-  switch (e.kind) {
-    case Kind::Gain: {
+  switch (e.effect) {
+    case Effect::GainError: {
       const bool up = d.coin();
       const double dev = clear ? (up ? d.uniform(0.05, 0.4) : d.uniform(0.05, 0.3)) : d.uniform(0.005, 0.03);
       e.gain0 = up ? 1 + dev : 1 - dev;
       e.scale_max = up ? 2.0 / dev : 0.8 / dev;  // g ∈ [0.2, 3]
       break;
     }
-    case Kind::Delay: {
+    case Effect::Delay: {
       const double phase = clear ? d.uniform(0.15, 1.0) : d.uniform(0.02, 0.15);  // at the band edge
       e.delay0 = phase / w_band;
       if (clear && d.coin() && std::round(e.delay0) >= 1 && std::round(e.delay0) * w_band <= 3.0)
@@ -611,7 +657,7 @@ void draw_effect(Effect& e, Draw& d, Strength strength, const Base& base, const 
       e.scale_max = (3.0 / w_band) / e.delay0;
       break;
     }
-    case Kind::Sensor: {
+    case Effect::SensorDynamics: {
       const double fc_rel = clear ? d.log_uniform(0.5, 2.0) : d.log_uniform(3.0, 8.0);
       e.order = d.coin() ? 1 : 2;
       e.sensor_zeta = d.uniform(0.5, 0.9);
@@ -619,84 +665,27 @@ void draw_effect(Effect& e, Draw& d, Strength strength, const Base& base, const 
       e.scale_max = (4.0 / w_band) / e.time_constant0;  // cut-off down to a quarter of the band edge
       break;
     }
-    case Kind::Unmodelled: {
-      const double l0 = std::log(std::max(w_lo, kTwoPi * 2 / st.P)), l1 = std::log(0.95 * w_band);
-      double best = 0, best_sep = -1;
-      for (int tries = 0; tries < 200; ++tries) {
-        const double w = std::exp(d.uniform(l0, l1));
-        double sep = 1e300;
-        for (const Mode& m : base.modes) sep = std::min(sep, std::abs(std::log(w / m.omega)));
-        if (sep > best_sep) {
-          best_sep = sep;
-          best = w;
-        }
-        if (sep >= std::log(1.12)) break;
-      }
-      e.extra_omega = best;
-      e.extra_zeta = d.log_uniform(0.01, 0.1);
-      e.series = d.coin();
-      if (e.series) {
-        e.kappa0 = clear ? d.log_uniform(0.5, 3.0) : d.log_uniform(0.02, 0.1);
-        e.scale_max = std::min(20.0, 0.95 / e.extra_zeta - 1) / e.kappa0;
-      } else {
-        const double rho = clear ? d.log_uniform(0.2, 1.0) : d.log_uniform(0.01, 0.05);
-        const cplx unit = d.sign() * std::polar(1.0, -kPi / 2 + d.uniform(-0.4, 0.4));
-        const cplx qm = std::polar(1.0, -best);
-        const double unit_peak = std::abs(Mode{best, e.extra_zeta, unit}.section().at(qm));
-        Chain sim = make_chain(base, {});
-        e.extra_residue0 = unit * rho * std::abs(sim.plant_at(qm)) / unit_peak;
-        e.scale_max = 5.0 / rho;
-      }
-      break;
-    }
-    case Kind::Mismatch: {
-      e.mode = d.integer(0, static_cast<int>(base.modes.size()) - 1);
-      const Mode& m = base.modes[static_cast<std::size_t>(e.mode)];
-      const double u = d.unit();
-      const int type = u < 0.4 ? 0 : u < 0.6 ? 1 : 2;  // frequency, damping, both
-      if (type != 1) e.shift0 = d.sign() * (clear ? d.uniform(0.02, 0.08) : d.uniform(0.002, 0.01));
-      if (type != 0)
-        e.damping_log0 = d.sign() * (clear ? d.uniform(std::log(1.4), std::log(2.5)) : d.uniform(std::log(1.03), std::log(1.1)));
-      double smax = 1e300;
-      if (e.shift0 != 0) smax = std::min(smax, 0.25 / std::abs(e.shift0));
-      if (e.shift0 > 0) smax = std::min(smax, (0.95 * kPi / m.omega - 1) / e.shift0);
-      if (e.damping_log0 > 0) smax = std::min(smax, std::log(0.7 / m.zeta) / e.damping_log0);
-      if (e.damping_log0 < 0) smax = std::min(smax, std::log(0.002 / m.zeta) / e.damping_log0);
-      e.scale_max = std::max(1.0, smax);
-      break;
-    }
-    case Kind::Nonlinear: {
-      e.at_input = d.coin();
-      const double u = d.unit();
-      const int type = u < 1.0 / 3 ? 0 : u < 2.0 / 3 ? 1 : 2;  // quadratic, cubic, both
-      auto coef = [&] { return d.sign() * (clear ? d.log_uniform(0.02, 0.1) : d.log_uniform(0.002, 0.01)); };
-      if (type != 1) e.quad0 = coef();
-      if (type != 0) e.cubic0 = coef();
-      double ss = 0;
-      const std::vector<double>& x = e.at_input ? st.u : st.y_sim;
-      for (double v : x) ss += v * v;
-      e.reference_rms = std::sqrt(ss / static_cast<double>(x.size()));
-      e.scale_max = 0.5 / std::max(std::abs(e.quad0), std::abs(e.cubic0));
-      break;
-    }
-    case Kind::Leakage:
+    case Effect::UnmodelledMode: draw_unmodelled_mode(e, d, clear, base, st, w_lo, w_band); break;
+    case Effect::ModeMismatch: draw_mode_mismatch(e, d, clear, base); break;
+    case Effect::Nonlinearity: draw_nonlinearity(e, d, clear, st); break;
+    case Effect::Leakage:
       e.scale_max = 1.0;  // 1: from rest
       break;
   }
 }
 
-json effect_json(const Effect& e, const Base& base) {
+json effect_json(const Injected& e, const Base& base) {
   const double s = e.scale;
   json j;
-  switch (e.kind) {
-    case Kind::Gain: j["gain"] = 1 + s * (e.gain0 - 1); break;
-    case Kind::Delay: j["samples"] = s * e.delay0; break;
-    case Kind::Sensor:
+  switch (e.effect) {
+    case Effect::GainError: j["gain"] = 1 + s * (e.gain0 - 1); break;
+    case Effect::Delay: j["samples"] = s * e.delay0; break;
+    case Effect::SensorDynamics:
       j["order"] = e.order;
       j["cutoff"] = 1.0 / (kTwoPi * s * e.time_constant0);  // cycles/sample
       if (e.order == 2) j["damping"] = e.sensor_zeta;
       break;
-    case Kind::Unmodelled:
+    case Effect::UnmodelledMode:
       j["connection"] = e.series ? "series" : "parallel";
       j["frequency"] = e.extra_omega / kTwoPi;
       j["damping"] = e.extra_zeta;
@@ -706,7 +695,7 @@ json effect_json(const Effect& e, const Base& base) {
         j["residue"] = {(s * e.extra_residue0).real(), (s * e.extra_residue0).imag()};
       }
       break;
-    case Kind::Mismatch: {
+    case Effect::ModeMismatch: {
       const Mode& m = base.modes[static_cast<std::size_t>(e.mode)];
       j["mode"] = e.mode;
       j["frequency_sim"] = m.omega / kTwoPi;
@@ -717,14 +706,14 @@ json effect_json(const Effect& e, const Base& base) {
       j["damping_ratio"] = std::exp(s * e.damping_log0);
       break;
     }
-    case Kind::Nonlinear:
+    case Effect::Nonlinearity:
       j["location"] = e.at_input ? "input" : "output";
       j["quadratic"] = s * e.quad0;
       j["cubic"] = s * e.cubic0;
       j["reference_rms"] = e.reference_rms;
       j["form"] = "x + quadratic x^2/r + cubic x^3/r^2";
       break;
-    case Kind::Leakage:
+    case Effect::Leakage:
       j["initial_state"] = s == 1.0 ? "rest" : "partly settled";
       j["transient_fraction"] = s;  // x(0) = (1 − s) x_ss(0)
       break;
@@ -733,7 +722,7 @@ json effect_json(const Effect& e, const Base& base) {
   j["target_ratio"] = e.target;
   j["scale"] = s;
   j["scale_max"] = e.scale_max;
-  j["lines"] = e.kind == Kind::Nonlinear ? "unexcited" : e.kind == Kind::Leakage ? "band (first period)" : "excited";
+  j["lines"] = e.effect == Effect::Nonlinearity ? "unexcited" : e.effect == Effect::Leakage ? "band (first period)" : "excited";
   return j;
 }
 
@@ -745,25 +734,19 @@ void validate_options(const GapCaseOptions& o) {
   if (static_cast<double>(o.period) * o.periods > static_cast<double>(1 << 26))
     fail("P*M = " + std::to_string(static_cast<double>(o.period) * o.periods) + " samples exceeds 2^26");
   if (o.effects.size() > 2) fail("at most 2 effects, got " + std::to_string(o.effects.size()));
-  std::set<std::string> seen;
-  for (const auto& n : o.effects) {
-    kind_of(n);
-    if (!seen.insert(n).second) fail("effect '" + n + "' given twice");
-  }
+  std::set<Effect> seen;
+  for (Effect e : o.effects)
+    if (!seen.insert(e).second) fail("effect '" + std::string(to_string(e)) + "' given twice");
   if (!o.effects.empty() && o.strength == Strength::None) fail("effects need strength subtle or clear, not none");
 }
 
-}  // namespace
-
-GapCase make_gap_case(const GapCaseOptions& o) {
-  validate_options(o);
-  Draw d(o.seed);
-  Draw dn(splitmix64(o.seed));  // the noise stream
-  const int P = o.period, M = o.periods;
+// Step 2 of gap_cases.hpp: the random-odd multisine (Schoukens) over the odd
+// lines 1 … K, K a random fraction 0.15 … 0.4 of P/2; one random line of each
+// full group of 4 consecutive odd lines left out; random phases, flat
+// amplitude, RMS 1 exactly (Σ u² = 2 Σ |U(k)|² = P). Also the line grid ω, q.
+// Draws: K, then one skip per full group, then one phase per excited line.
+Setting draw_excitation(Draw& d, int P, int M, Fft& fft) {
   const std::size_t bins = static_cast<std::size_t>(P / 2 + 1);
-  Fft fft(P);
-
-  // Excitation: random-odd multisine over odd lines 1 … K.
   Setting st;
   st.P = P;
   st.M = M;
@@ -781,8 +764,7 @@ GapCase make_gap_case(const GapCaseOptions& o) {
     st.band.push_back(k);
     (excited[static_cast<std::size_t>(k)] ? st.excited : st.unexcited_band).push_back(k);
   }
-  const double F = static_cast<double>(st.excited.size());
-  const double amplitude = std::sqrt(P / (2 * F));  // Σ u² = 2 Σ |U(k)|² = P: RMS 1
+  const double amplitude = std::sqrt(P / (2 * static_cast<double>(st.excited.size())));
   st.U.assign(bins, 0.0);
   for (int k : st.excited) st.U[static_cast<std::size_t>(k)] = std::polar(amplitude, kTwoPi * d.unit());
   st.u = fft.inverse(st.U);
@@ -792,23 +774,27 @@ GapCase make_gap_case(const GapCaseOptions& o) {
     st.omega[k] = kTwoPi * static_cast<double>(k) / P;
     st.q[k] = std::polar(1.0, -st.omega[k]);
   }
+  return st;
+}
 
-  // Simulation model, resonances inside the excited band.
-  const double w_band = kTwoPi * st.K / P;
-  const double w_lo = std::max(0.08 * w_band, kTwoPi * 2 / P), w_hi = 0.9 * w_band;
-  const Base base = draw_system(d, w_lo, w_hi);
-  {
-    const Chain sim = make_chain(base, {});
-    st.Hsim.resize(bins);
-    std::vector<cplx> Y(bins);
-    for (std::size_t k = 0; k < bins; ++k) {
-      st.Hsim[k] = sim.plant_at(st.q[k]);
-      Y[k] = st.Hsim[k] * st.U[k];
-    }
-    st.y_sim = fft.inverse(Y);
+// The simulation model's response at every line and its steady-state output
+// over one period (Y(k) = G(e^{jω_k}) U(k), inverse FFT).
+void simulate_model(const Base& base, Fft& fft, Setting& st) {
+  const Chain sim = make_chain(base, {});
+  const std::size_t bins = st.U.size();
+  st.Hsim.resize(bins);
+  std::vector<cplx> Y(bins);
+  for (std::size_t k = 0; k < bins; ++k) {
+    st.Hsim[k] = sim.plant_at(st.q[k]);
+    Y[k] = st.Hsim[k] * st.U[k];
   }
+  st.y_sim = fft.inverse(Y);
+}
 
-  // Output-noise filter H_v, normalised to mean |H_v|² = 1 over the excited lines.
+// Step 4 of gap_cases.hpp, the shape: H_v a random stable first- or
+// second-order filter (coin, then its coefficients), normalised to mean
+// |H_v|² = 1 over the excited lines; st.w = |H_v|² at every line.
+Section draw_noise_filter(Draw& d, Setting& st) {
   Section hv;
   if (d.coin()) {
     hv.b1 = d.uniform(-0.6, 0.6);
@@ -819,151 +805,206 @@ GapCase make_gap_case(const GapCaseOptions& o) {
     hv.a2 = r * r;
     hv.b1 = d.uniform(-0.8, 0.8);
   }
-  {
-    double mean = 0;
-    for (int k : st.excited) mean += std::norm(hv.at(st.q[static_cast<std::size_t>(k)]));
-    const double c = 1 / std::sqrt(mean / F);
-    hv.b0 *= c;
-    hv.b1 *= c;
-    hv.b2 *= c;
-  }
-  st.w.resize(bins);
-  for (std::size_t k = 0; k < bins; ++k) st.w[k] = std::norm(hv.at(st.q[k]));
+  double mean = 0;
+  for (int k : st.excited) mean += std::norm(hv.at(st.q[static_cast<std::size_t>(k)]));
+  const double c = 1 / std::sqrt(mean / static_cast<double>(st.excited.size()));
+  hv.b0 *= c;
+  hv.b1 *= c;
+  hv.b2 *= c;
+  st.w.resize(st.q.size());
+  for (std::size_t k = 0; k < st.q.size(); ++k) st.w[k] = std::norm(hv.at(st.q[k]));
+  return hv;
+}
+
+// Output signal power per excited line of one period's DFT (the SNR's numerator).
+double signal_power(const Setting& st) {
   double signal = 0;
   for (int k : st.excited) signal += std::norm(st.Hsim[static_cast<std::size_t>(k)] * st.U[static_cast<std::size_t>(k)]);
-  signal /= F;
+  return signal / static_cast<double>(st.excited.size());
+}
 
-  // Effects: draw, then calibrate noise level and magnitudes.
-  std::vector<Effect> effects;
-  for (const auto& n : o.effects) {
-    Effect e;
-    e.name = n;
-    e.kind = kind_of(n);
+// The withheld effects at magnitude 1: per effect, in the order given, its
+// physical parameters (draw_effect) and then its target ratio.
+std::vector<Injected> draw_effects(Draw& d, const GapCaseOptions& o, const Base& base, const Setting& st, double w_lo,
+                                   double w_band) {
+  std::vector<Injected> effects;
+  for (Effect effect : o.effects) {
+    Injected e;
+    e.effect = effect;
     draw_effect(e, d, o.strength, base, st, w_lo, w_band);
     const auto range = gap_ratio_range(o.strength);
     e.target = d.log_uniform(range[0], range[1]);
     effects.push_back(e);
   }
-  Calibrator cal(base, st, fft);
-  const double nu_lo = signal * 1e-6, nu_hi = signal * 1e-2;  // SNR 60 … 20 dB
-  double nu;
-  if (effects.empty()) {
-    nu = signal / std::pow(10.0, d.uniform(2, 6));
-  } else {
-    double lsum = 0;
-    for (Effect& e : effects) lsum += std::log(cal.deviation(e, 1.0) / e.target);
-    nu = std::clamp(std::exp(lsum / static_cast<double>(effects.size())), nu_lo, nu_hi);
-    // The bracket [0, hi] of each effect's magnitude: hi = 1 (the draw) when it
-    // reaches the target, else the first of a grid over (1, scale_max] that
-    // does (the deviation need not grow monotonically, e.g. a mode moving
-    // across the lines); when none does, the noise is lowered (past 60 dB: snr_clamped).
-    std::vector<double> hi_of;
-    for (Effect& e : effects) {
-      double hi = std::min(1.0, e.scale_max), best = hi, Abest = cal.deviation(e, hi);
-      if (Abest < e.target * nu) {
-        for (int i = 1; i <= 32; ++i) {
-          const double s = hi + (e.scale_max - hi) * i / 32.0, A = cal.deviation(e, s);
-          if (A > Abest) {
-            Abest = A;
-            best = s;
-          }
-          if (A >= e.target * nu) break;
+  return effects;
+}
+
+// The upper end of the bisection bracket [0, hi] of each effect's magnitude,
+// lowering ν where an effect cannot reach its target: hi = 1 (the draw) when
+// it reaches the target, else the first point of a grid of 32 over
+// (1, scale_max] that does (the deviation need not grow monotonically, e.g. a
+// mode moving across the lines); when none does, the best one, and ν lowered
+// so that it hits the target (past 60 dB: snr_clamped).
+// Fails: Error(Numerical) when an effect makes no deviation at all.
+std::vector<double> magnitude_brackets(std::vector<Injected>& effects, Calibrator& cal, double& nu) {
+  std::vector<double> hi_of;
+  for (Injected& e : effects) {
+    double hi = std::min(1.0, e.scale_max), best = hi, Abest = cal.deviation(e, hi);
+    if (Abest < e.target * nu) {
+      for (int i = 1; i <= 32; ++i) {
+        const double s = hi + (e.scale_max - hi) * i / 32.0, A = cal.deviation(e, s);
+        if (A > Abest) {
+          Abest = A;
+          best = s;
         }
-        if (!(Abest > 0)) throw Error(ErrorKind::Numerical, kWhere, "effect " + e.name + " makes no deviation");
-        if (Abest < e.target * nu * (1 - 1e-9)) {
-          nu = Abest / e.target;
-        }
-        hi = best;
+        if (A >= e.target * nu) break;
       }
-      hi_of.push_back(hi);
-    }
-    for (std::size_t j = 0; j < effects.size(); ++j) {
-      Effect& e = effects[j];
-      double s = 1.0;
-      double A = cal.deviation(e, s);
-      if (!(e.scale_max >= 1.0 && std::abs(A / nu / e.target - 1) <= 1e-9)) {
-        double lo = 0, hi = hi_of[j];
-        for (int it = 0; it < 200; ++it) {
-          s = 0.5 * (lo + hi);
-          A = cal.deviation(e, s);
-          const double rel = A / nu / e.target - 1;
-          if (std::abs(rel) <= 1e-7 || hi - lo <= 1e-15 * hi_of[j]) break;
-          (rel < 0 ? lo : hi) = s;
-        }
+      if (!(Abest > 0))
+        throw Error(ErrorKind::Numerical, kWhere, "effect " + std::string(to_string(e.effect)) + " makes no deviation");
+      if (Abest < e.target * nu * (1 - 1e-9)) {
+        nu = Abest / e.target;
       }
-      e.scale = s;
-      e.ratio = cal.deviation(e, s, &e.line_ratio) / nu;
-      for (double& r : e.line_ratio) r /= nu;
-      e.lines = cal.lines(e);
+      hi = best;
     }
+    hi_of.push_back(hi);
   }
+  return hi_of;
+}
 
-  const bool clamped = nu < nu_lo * (1 - 1e-9);  // the SNR had to exceed 60 dB
+// Each effect's magnitude by bisection on [0, hi] to its target ratio at the
+// noise level ν (relative 1e-7; the draw itself when it already hits it), then
+// its achieved ratio, per-line ratios and lines.
+void hit_targets(std::vector<Injected>& effects, const std::vector<double>& hi_of, Calibrator& cal, double nu) {
+  for (std::size_t j = 0; j < effects.size(); ++j) {
+    Injected& e = effects[j];
+    double s = 1.0;
+    double A = cal.deviation(e, s);
+    if (!(e.scale_max >= 1.0 && std::abs(A / nu / e.target - 1) <= 1e-9)) {
+      double lo = 0, hi = hi_of[j];
+      for (int it = 0; it < 200; ++it) {
+        s = 0.5 * (lo + hi);
+        A = cal.deviation(e, s);
+        const double rel = A / nu / e.target - 1;
+        if (std::abs(rel) <= 1e-7 || hi - lo <= 1e-15 * hi_of[j]) break;
+        (rel < 0 ? lo : hi) = s;
+      }
+    }
+    e.scale = s;
+    e.ratio = cal.deviation(e, s, &e.line_ratio) / nu;
+    for (double& r : e.line_ratio) r /= nu;
+    e.lines = cal.lines(e);
+  }
+}
 
-  // The true system's record.
-  std::vector<const Effect*> ptrs;
-  for (const Effect& e : effects) ptrs.push_back(&e);
+// The strength calibration of gap_cases.hpp: returns the noise level ν and
+// sets each effect's magnitude. Without effects ν gives a random SNR of
+// 20 … 60 dB (one draw); with effects it is the geometric mean of the levels
+// at which each draw hits its target, clamped to that SNR range, then lowered
+// where an effect cannot reach its target (magnitude_brackets).
+double calibrate(Draw& d, std::vector<Injected>& effects, Calibrator& cal, double signal) {
+  if (effects.empty()) return signal / std::pow(10.0, d.uniform(2, 6));
+  const double nu_lo = signal * 1e-6, nu_hi = signal * 1e-2;  // SNR 60 … 20 dB
+  double lsum = 0;
+  for (Injected& e : effects) lsum += std::log(cal.deviation(e, 1.0) / e.target);
+  double nu = std::clamp(std::exp(lsum / static_cast<double>(effects.size())), nu_lo, nu_hi);
+  const std::vector<double> hi_of = magnitude_brackets(effects, cal, nu);
+  hit_targets(effects, hi_of, cal, nu);
+  return nu;
+}
+
+// The noise-free record of the true system (step 3 of gap_cases.hpp).
+struct TrueOutput {
+  std::vector<cplx> Y;           // steady-state output spectrum of one period
+  std::vector<double> y;         // P·M samples
+  double transient_energy = 0;   // of the first period (leakage)
+};
+
+// Exact periodic steady state per line; with leakage, the transient of the
+// start from rest (scaled by its magnitude) added, delayed by the chain's
+// delay (delay_transient).
+TrueOutput true_output(const Base& base, const std::vector<Injected>& effects, const Setting& st, Fft& fft) {
+  const int P = st.P, M = st.M;
+  std::vector<const Injected*> ptrs;
+  for (const Injected& e : effects) ptrs.push_back(&e);
   const Chain truth_chain = make_chain(base, ptrs);
-  const std::vector<cplx> Y = steady(truth_chain, st, fft, true);
-  const std::vector<double> y_ss = fft.inverse(Y);
+  TrueOutput out;
+  out.Y = steady(truth_chain, st, fft, true);
+  const std::vector<double> y_ss = fft.inverse(out.Y);
   const std::size_t N = static_cast<std::size_t>(P) * static_cast<std::size_t>(M);
-  std::vector<double> y0(N);
-  for (std::size_t t = 0; t < N; ++t) y0[t] = y_ss[t % static_cast<std::size_t>(P)];
-  double transient_energy = 0;
+  out.y.resize(N);
+  for (std::size_t t = 0; t < N; ++t) out.y[t] = y_ss[t % static_cast<std::size_t>(P)];
   if (truth_chain.leak > 0) {
     const std::vector<double> y_nd = fft.inverse(steady(truth_chain, st, fft, false));
     const std::vector<double> tr = delay_transient(transient(truth_chain, st, y_nd, M + 1), y_nd, truth_chain.delay, N);
-    for (std::size_t t = 0; t < N; ++t) y0[t] += truth_chain.leak * tr[t];
-    for (int t = 0; t < P; ++t) transient_energy += std::pow(truth_chain.leak * tr[static_cast<std::size_t>(t)], 2);
+    for (std::size_t t = 0; t < N; ++t) out.y[t] += truth_chain.leak * tr[t];
+    for (int t = 0; t < P; ++t) out.transient_energy += std::pow(truth_chain.leak * tr[static_cast<std::size_t>(t)], 2);
   }
-  double ratio_combined = 0;
+  return out;
+}
+
+// All effects together: mean over the excited lines of |Y − G_sim U|² M / σ²(k).
+double combined_ratio(const Setting& st, const std::vector<cplx>& Y, double nu) {
+  double ratio = 0;
   for (int k : st.excited) {
     const std::size_t i = static_cast<std::size_t>(k);
-    ratio_combined += std::norm(Y[i] - st.Hsim[i] * st.U[i]) * M / (nu * st.w[i]);
+    ratio += std::norm(Y[i] - st.Hsim[i] * st.U[i]) * st.M / (nu * st.w[i]);
   }
-  ratio_combined /= F;
+  return ratio / static_cast<double>(st.excited.size());
+}
 
-  // Noise: coloured output noise (stationary over the whole record), tiny input noise.
-  double input_var = 0;
-  if (d.coin()) {
-    double m = 1e300;
-    for (int k : st.excited) {
-      const std::size_t i = static_cast<std::size_t>(k);
-      m = std::min(m, nu * st.w[i] / std::max(std::norm(st.Hsim[i]), 1e-300));
-    }
-    input_var = d.log_uniform(1e-3, 1e-2) * m;
+// Step 4 of gap_cases.hpp, the input noise: with probability 1/2 (one coin) a
+// white noise whose effect on Y/U is 0.1 … 1 % of the output noise's at the
+// worst excited line (one more draw); else none. Returns its variance.
+double draw_input_noise(Draw& d, const Setting& st, double nu) {
+  if (!d.coin()) return 0;
+  double m = 1e300;
+  for (int k : st.excited) {
+    const std::size_t i = static_cast<std::size_t>(k);
+    m = std::min(m, nu * st.w[i] / std::max(std::norm(st.Hsim[i]), 1e-300));
   }
-  GapCase out;
-  out.record.resize(static_cast<Eigen::Index>(N), 2);
-  {
-    const std::size_t burn = 400;  // noise-filter poles have modulus ≤ 0.9
-    std::vector<double> e(N + burn), v;
-    for (double& x : e) x = std::sqrt(nu) * dn.normal();
-    hv.filter(e, v);
-    const double su = std::sqrt(input_var);
-    for (std::size_t t = 0; t < N; ++t) {
-      const Eigen::Index i = static_cast<Eigen::Index>(t);
-      const double nu_t = su * dn.normal();
-      out.record(i, 0) = st.u[t % static_cast<std::size_t>(P)] + (o.noise ? nu_t : 0.0);
-      out.record(i, 1) = y0[t] + (o.noise ? v[t + burn] : 0.0);
-    }
+  return d.log_uniform(1e-3, 1e-2) * m;
+}
+
+// The u, y record: the input period repeated and the true output, plus (when
+// `noise`) the coloured output noise v = H_v e, one stationary sequence over
+// the record after a burn-in of 400 samples (noise-filter poles have modulus
+// ≤ 0.9), and the white input noise. All from the noise stream `dn`: first
+// the N + 400 output-noise normals, then one input-noise normal per sample.
+Eigen::MatrixXd noisy_record(Draw& dn, const Section& hv, double nu, double input_var, const Setting& st,
+                             const std::vector<double>& y, bool noise) {
+  const std::size_t P = static_cast<std::size_t>(st.P), N = y.size(), burn = 400;
+  Eigen::MatrixXd record(static_cast<Eigen::Index>(N), 2);
+  std::vector<double> e(N + burn), v;
+  for (double& x : e) x = std::sqrt(nu) * dn.normal();
+  hv.filter(e, v);
+  const double su = std::sqrt(input_var);
+  for (std::size_t t = 0; t < N; ++t) {
+    const Eigen::Index i = static_cast<Eigen::Index>(t);
+    const double nu_t = su * dn.normal();
+    record(i, 0) = st.u[t % P] + (noise ? nu_t : 0.0);
+    record(i, 1) = y[t] + (noise ? v[t + burn] : 0.0);
   }
+  return record;
+}
 
-  out.sim_model = realise(base);
-  out.meta.period = P;
-  out.meta.periods = M;
-  out.meta.sample_time = 1.0;
-  out.meta.excited_lines = st.excited;
-  out.effects = o.effects;
+// The scalar results of the case that the truth reports.
+struct CaseNumbers {
+  double signal = 0, nu = 0, input_var = 0, ratio_combined = 0, transient_energy = 0;
+  bool clamped = false;
+};
 
+// The truth JSON of gap_cases.hpp, and the truth bands (each effect's
+// bands_of, merged) into out.bands.
+void write_truth(const GapCaseOptions& o, const Base& base, const Setting& st, const Section& hv,
+                 const std::vector<Injected>& effects, const CaseNumbers& n, GapCase& out) {
   json details = json::object();
   std::vector<std::array<double, 2>> all_bands;
-  for (const Effect& e : effects) {
+  for (const Injected& e : effects) {
     json j = effect_json(e, base);
-    const auto b = bands_of(e.lines, e.line_ratio, P);
+    const auto b = bands_of(e.lines, e.line_ratio, st.P);
     j["bands"] = bands_json(b);
     all_bands.insert(all_bands.end(), b.begin(), b.end());
-    details[e.name] = j;
+    details[to_string(e.effect)] = j;
   }
   out.bands = merge_bands(all_bands);
 
@@ -974,17 +1015,18 @@ GapCase make_gap_case(const GapCaseOptions& o) {
                      {"damped_frequency", std::arg(m.pole()) / kTwoPi},
                      {"residue", {m.residue.real(), m.residue.imag()}}});
   json& t = out.truth;
-  t["effects"] = o.effects;
+  t["effects"] = json::array();
+  for (Effect e : o.effects) t["effects"].push_back(to_string(e));
   t["strength"] = effects.empty() ? "none" : to_string(o.strength);
   t["seed"] = o.seed;
-  t["period"] = P;
-  t["periods"] = M;
+  t["period"] = st.P;
+  t["periods"] = st.M;
   t["bands"] = bands_json(out.bands);
-  t["snr_db"] = 10 * std::log10(signal / nu);
-  t["snr_clamped"] = clamped;
-  t["noise"] = {{"scale", nu},
+  t["snr_db"] = 10 * std::log10(n.signal / n.nu);
+  t["snr_clamped"] = n.clamped;
+  t["noise"] = {{"scale", n.nu},
                 {"filter", {{"b", {hv.b0, hv.b1, hv.b2}}, {"a", {1.0, hv.a1, hv.a2}}}},
-                {"input_std", std::sqrt(input_var)},
+                {"input_std", std::sqrt(n.input_var)},
                 {"enabled", o.noise},
                 {"definition", "per-line variance of one period's unitary DFT = scale |H_v|^2; of the M-period mean: /M"}};
   t["system"] = {{"modes", modes},
@@ -992,9 +1034,60 @@ GapCase make_gap_case(const GapCaseOptions& o) {
                  {"real_residue", base.has_real ? json(base.real_residue) : json(nullptr)},
                  {"D", base.D}};
   t["excitation"] = {{"band_line", st.K}, {"lines", st.excited.size()}, {"rms", 1.0}};
-  t["ratio_combined"] = ratio_combined;
-  t["transient_energy_first_period"] = transient_energy;
+  t["ratio_combined"] = n.ratio_combined;
+  t["transient_energy_first_period"] = n.transient_energy;
   t["details"] = details;
+}
+
+}  // namespace
+
+/// One blind case of the gap validation (gap_cases.hpp, steps 1-4 and the
+/// strength calibration).
+///
+/// Method: excitation; simulation model; noise shape; the withheld effects and
+/// their calibration against the noise level; the true record; the noise; the
+/// truth. Every draw comes from one mt19937_64 stream in that order (the
+/// output and input noise from a second one), so a case is a function of the
+/// seed alone.
+/// Numerical aspects: O(P log P) per calibration evaluation, up to ~250 of them
+/// per effect (grid and bisection); O(P M) for the record (O(P M · 64) with a
+/// fractional delay and leakage: the windowed-sinc delay of the transient).
+/// Fails: Error(Input) for bad options (validate_options), Error(Numerical)
+/// when an effect makes no deviation.
+GapCase make_gap_case(const GapCaseOptions& o) {
+  validate_options(o);
+  Draw d(o.seed);
+  Draw dn(splitmix64(o.seed));  // the noise stream
+  Fft fft(o.period);
+  Setting st = draw_excitation(d, o.period, o.periods, fft);
+  // Resonances inside the excited band.
+  const double w_band = kTwoPi * st.K / st.P;
+  const double w_lo = std::max(0.08 * w_band, kTwoPi * 2 / st.P), w_hi = 0.9 * w_band;
+  const Base base = draw_system(d, w_lo, w_hi);
+  simulate_model(base, fft, st);
+  const Section hv = draw_noise_filter(d, st);
+
+  CaseNumbers n;
+  n.signal = signal_power(st);
+  std::vector<Injected> effects = draw_effects(d, o, base, st, w_lo, w_band);
+  Calibrator cal(base, st, fft);
+  n.nu = calibrate(d, effects, cal, n.signal);
+  n.clamped = n.nu < n.signal * 1e-6 * (1 - 1e-9);  // the SNR had to exceed 60 dB
+
+  const TrueOutput y = true_output(base, effects, st, fft);
+  n.transient_energy = y.transient_energy;
+  n.ratio_combined = combined_ratio(st, y.Y, n.nu);
+  n.input_var = draw_input_noise(d, st, n.nu);
+
+  GapCase out;
+  out.record = noisy_record(dn, hv, n.nu, n.input_var, st, y.y, o.noise);
+  out.sim_model = realise(base);
+  out.meta.period = st.P;
+  out.meta.periods = st.M;
+  out.meta.sample_time = 1.0;
+  out.meta.excited_lines = st.excited;
+  out.effects = o.effects;
+  write_truth(o, base, st, hv, effects, n, out);
   return out;
 }
 

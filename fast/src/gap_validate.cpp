@@ -17,11 +17,14 @@
 namespace fdsid {
 namespace {
 
-std::string joined(std::vector<std::string> effects) {
+// The effect names sorted and joined by "+"; "none" when empty.
+std::string joined(const std::vector<Effect>& effects) {
   if (effects.empty()) return "none";
-  std::sort(effects.begin(), effects.end());
+  std::vector<std::string> names;
+  for (Effect e : effects) names.emplace_back(to_string(e));
+  std::sort(names.begin(), names.end());
   std::string s;
-  for (const std::string& e : effects) s += (s.empty() ? "" : "+") + e;
+  for (const std::string& e : names) s += (s.empty() ? "" : "+") + e;
   return s;
 }
 
@@ -31,7 +34,7 @@ GapCaseOptions schedule(const GapValidationOptions& o, int i, std::string& categ
   c.period = o.period;
   c.periods = o.periods;
   c.seed = o.seed * 1000003ULL + static_cast<std::uint64_t>(i);
-  const std::vector<std::string>& names = gap_effect_names();
+  const auto& names = kAllEffects;
   const int slot = i % 20;
   if (slot < 2) {
     category = "none";

@@ -471,7 +471,7 @@ Figure gap_figure(const GapReport& r, int periods) {
 
   Panel c;
   std::string chosen;
-  for (const std::string& e : r.present) chosen += (chosen.empty() ? "" : ", ") + e;
+  for (Effect e : r.present) chosen += (chosen.empty() ? "" : ", ") + std::string(to_string(e));
   c.title = "gap left by each candidate effect alone; chosen: " + (chosen.empty() ? std::string("none") : chosen);
   c.x = axis("candidate effect", false, 0.5, static_cast<double>(r.candidates.size()) + 0.5);
   c.y = axis("gap = (M-2)/(M-1) mean t", true);
@@ -481,7 +481,7 @@ Figure gap_figure(const GapReport& r, int periods) {
   pts.symbol = "•";
   pts.colour = Blue;
   for (size_t i = 0; i < r.candidates.size(); ++i) {
-    c.x.categories.push_back(r.candidates[i].effect);
+    c.x.categories.push_back(to_string(r.candidates[i].effect()));
     pts.x.push_back(i + 1.0);
     pts.y.push_back(r.candidates[i].gap_after);
   }

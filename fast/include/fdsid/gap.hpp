@@ -34,8 +34,11 @@
 /// excited lines of each other form one band (windows of 8 lines when no single
 /// line is flagged).
 #include <array>
-#include <map>
+#include <optional>
 #include <string>
+#include <string_view>
+#include <utility>
+#include <variant>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -53,20 +56,96 @@ struct GapOptions {
   double fdr = 0.05;           ///< Benjamini–Hochberg false-discovery rate of the bands
 };
 
+/// The unmodelled effects of CONTRACTS.md's table, in its order.
+enum class Effect { GainError, Delay, SensorDynamics, UnmodelledMode, ModeMismatch, Nonlinearity, Leakage };
+
+/// The one list of all effects, in CONTRACTS.md's order (the order candidates
+/// are tried in and gap-validate's schedule walks).
+inline constexpr std::array<Effect, 7> kAllEffects = {Effect::GainError,      Effect::Delay,
+                                                      Effect::SensorDynamics, Effect::UnmodelledMode,
+                                                      Effect::ModeMismatch,   Effect::Nonlinearity,
+                                                      Effect::Leakage};
+
+/// The CONTRACTS.md name: "gain_error", "delay", "sensor_dynamics",
+/// "unmodelled_mode", "mode_mismatch", "nonlinearity", "leakage".
+const char* to_string(Effect effect);
+
+/// Inverse of to_string. Throws Error(Input) naming the known effects for any
+/// other name.
+Effect effect_from_string(std::string_view name);
+
+/// Whether the effect is a change of the linear response G (the first five):
+/// those are fitted into G; nonlinearity and leakage have their own tests.
+constexpr bool is_linear(Effect e) { return e != Effect::Nonlinearity && e != Effect::Leakage; }
+
+/// Parameters of each effect as the diagnosis fits them (see the fits in
+/// gap.cpp for the forms). The JSON "parameters" object lists them under the
+/// names given beside each field.
+
+/// A resonance: natural frequency (Hz; cycles/sample when Ts = 1) and damping ratio.
+struct Resonance {
+  double frequency_hz = 0;  ///< "frequency_hz"
+  double damping = 0;       ///< "damping"
+};
+/// G → g G.
+struct GainError {
+  double gain = 1;  ///< "gain"
+};
+/// G → e^{−j2πfτ} G.
+struct Delay {
+  double samples = 0;  ///< "samples" (τ)
+  double seconds = 0;  ///< "seconds" (τ Ts)
+};
+/// G → L(f) G, L a unit-DC-gain low-pass of first or second order.
+struct SensorDynamics {
+  double cutoff_hz = 0;  ///< "cutoff_hz"
+  int order = 1;         ///< "order" (1 or 2)
+  bool discrete = true;  ///< "discrete" (1: the discrete form, 0: the continuous one)
+  double damping = 0;    ///< "damping", listed for order 2 only
+};
+/// A resonance the model lacks, in parallel (G + mode) or in series (G · mode).
+struct UnmodelledMode {
+  std::optional<Resonance> mode;  ///< absent when no start gave a finite fit
+  bool series = false;            ///< "series" (1 or 0)
+};
+/// One of the model's resonances moved.
+struct ModeMismatch {
+  std::optional<Resonance> mode;             ///< the refitted resonance; absent when none converged
+  std::optional<double> model_frequency_hz;  ///< "model_frequency_hz" of the moved mode; absent when the model has none to move
+};
+/// A static polynomial a₂ x² + a₃ x³ at the output or at the input.
+struct Nonlinearity {
+  bool fitted = false;    ///< false: no signal to form x², x³ from (nothing listed)
+  double a2 = 0, a3 = 0;  ///< "a2", "a3"
+  bool at_input = false;  ///< "at_input" (1 or 0)
+};
+/// The first periods carry a transient and are dropped.
+struct Leakage {
+  int transient_periods = 0;  ///< "transient_periods"
+};
+
+/// One alternative per effect, in the order of Effect (index() is the effect).
+using EffectParameters =
+    std::variant<GainError, Delay, SensorDynamics, UnmodelledMode, ModeMismatch, Nonlinearity, Leakage>;
+
+/// The parameters as (name, value) pairs, sorted by name — the JSON
+/// "parameters" object and the text report list them so.
+std::vector<std::pair<std::string, double>> parameter_list(const EffectParameters& parameters);
+
 /// One effect fitted to the data alone (added to the model as given) or as
 /// part of the chosen set.
 struct EffectFit {
-  std::string effect;                        ///< a CONTRACTS.md effect name
-  double gap_after = 0;                      ///< gap with this effect added
-  double shrink = 0;                         ///< 1 − gap_after / gap_before
-  int dof = 0;                               ///< real parameters it adds
-  double p_value = 1;                        ///< its test (see the file comment)
-  std::map<std::string, double> parameters;  ///< e.g. {"samples": 1.5} for a delay
+  double gap_after = 0;         ///< gap with this effect added
+  double shrink = 0;            ///< 1 − gap_after / gap_before
+  int dof = 0;                  ///< real parameters it adds
+  double p_value = 1;           ///< its test (see the file comment)
+  EffectParameters parameters;  ///< e.g. Delay{1.5, 1.5} for a delay
+  Effect effect() const { return static_cast<Effect>(parameters.index()); }
 };
 
 struct GapReport {
   double gap_before = 0, gap_after = 0;
-  std::vector<std::string> present;                ///< judged present, largest shrink first
+  std::vector<Effect> present;                     ///< judged present, largest shrink first
   std::vector<std::array<double, 2>> bands;        ///< Hz (cycles/sample when Ts = 1)
   std::vector<EffectFit> candidates;               ///< every effect tried alone, best first
   std::vector<EffectFit> chosen;                   ///< the present ones, as fitted jointly (greedy order)

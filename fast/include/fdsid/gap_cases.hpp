@@ -61,6 +61,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fdsid/frf_id.hpp"
+#include "fdsid/gap.hpp"
 #include "fdsid/model.hpp"
 
 namespace fdsid {
@@ -70,16 +71,12 @@ enum class Strength { None, Subtle, Clear };
 /// "none", "subtle", "clear".
 const char* to_string(Strength strength);
 
-/// The effect names of CONTRACTS.md: gain_error, delay, sensor_dynamics,
-/// unmodelled_mode, mode_mismatch, nonlinearity, leakage.
-const std::vector<std::string>& gap_effect_names();
-
 /// The range the calibration ratio (see above) is drawn from: Subtle [0.5, 3],
 /// Clear [10, 100]; None [0, 0].
 std::array<double, 2> gap_ratio_range(Strength strength);
 
 struct GapCaseOptions {
-  std::vector<std::string> effects;  ///< 0, 1 or 2 distinct names of gap_effect_names()
+  std::vector<Effect> effects;       ///< 0, 1 or 2 distinct effects (fdsid/gap.hpp)
   Strength strength = Strength::Clear;  ///< ignored when `effects` is empty; None needs it empty
   int period = 1024;                 ///< P: even, 32 … 2^22
   int periods = 8;                   ///< M ≥ 2
@@ -91,7 +88,7 @@ struct GapCase {
   StateSpace sim_model;              ///< what the user has: discrete, sample_time 1
   Eigen::MatrixXd record;            ///< P·M rows × 2 columns (u, y)
   RecordMeta meta;                   ///< period, periods, sample_time = 1, excited_lines
-  std::vector<std::string> effects;  ///< the truth, in the order given
+  std::vector<Effect> effects;       ///< the truth, in the order given
   /// Truth: bands (cycles/sample, sorted, disjoint) holding the lines that make
   /// up half of each effect's calibration ratio (at most 4 per effect, padded by
   /// one line each side); empty for effect-free cases.
@@ -106,8 +103,8 @@ struct GapCase {
   nlohmann::json truth;
 };
 
-/// Makes one case; deterministic in options.seed. Throws Error(Input) for an
-/// unknown or repeated effect name, more than two effects, effects with
+/// Makes one case; deterministic in options.seed. Throws Error(Input) for a
+/// repeated effect, more than two effects, effects with
 /// Strength::None, or a bad P / M.
 GapCase make_gap_case(const GapCaseOptions& options);
 
