@@ -1,33 +1,28 @@
 // Pintelon (2002) frequency-domain subspace identification, double precision.
 #include "fdsid/frf_id.hpp"
 
-#include <fftw3.h>
-
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <set>
-#include <sstream>
-#include <thread>
 
 #include "fdsid/error.hpp"
-#include "fftw_lock.hpp"
+#include "numerics/constants.hpp"
+#include "numerics/fft.hpp"
+#include "numerics/format.hpp"
+#include "numerics/qr.hpp"
+#include "numerics/rank.hpp"
 
 namespace fdsid {
 
 namespace {
 
-constexpr double kUnitRoundoff = std::numeric_limits<double>::epsilon() / 2;
+using numerics::kUnitRoundoff;
 // Largest number of rows r (m + p) of Z that step 1 attempts.
 constexpr int kMaxColumns = 4000;
 
-std::string fmt(double x, int digits = 6) {
-  std::ostringstream s;
-  s.precision(digits);
-  s << x;
-  return s.str();
-}
+using numerics::fmt;
 
 [[noreturn]] void fail(ErrorKind kind, const std::string& where, const std::string& what) {
   throw Error(kind, where, what);
@@ -87,46 +82,16 @@ double triangular_condition(const Eigen::MatrixXd& Rfull) {
 }
 
 // ---------------------------------------------------------------------------
-// Chunked Householder QR (TSQR). Rows come in groups (one group per frequency):
-// fill(g, rows) writes group g's `rows_per_group` rows. The R factor of the
-// whole tall matrix is accumulated as R of [R; next chunk], so the matrix is
-// never stored; threads work on contiguous ranges and their R's are merged by
-// one more QR. Returns R (cols × cols, upper triangular, row signs arbitrary).
+// Rows come in groups (one group per frequency): fill(g, rows) writes group
+// g's `rows_per_group` rows. R of the whole tall matrix by the streamed QR of
+// numerics/qr.hpp (default chunking: 2048 rows per chunk, blocks of ≥ 2^24
+// flops, fixed by the dimensions so R does not depend on the core count).
 using RowFill = std::function<void(int, Eigen::Ref<Eigen::MatrixXd>)>;
 
-Eigen::MatrixXd tsqr_range(int g0, int g1, int rows_per_group, int cols, const RowFill& fill) {
-  const int chunk = std::max(1, 2048 / rows_per_group);
-  Eigen::MatrixXd work = Eigen::MatrixXd::Zero(cols + chunk * rows_per_group, cols);
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr;
-  for (int a = g0; a < g1; a += chunk) {
-    const int b = std::min(g1, a + chunk);
-    if (b - a < chunk) work.bottomRows((chunk - (b - a)) * rows_per_group).setZero();
-    for (int g = a; g < b; ++g) fill(g, work.middleRows(cols + (g - a) * rows_per_group, rows_per_group));
-    qr.compute(work);
-    work.topRows(cols) = qr.matrixQR().topRows(cols).triangularView<Eigen::Upper>();
-  }
-  return work.topRows(cols);
-}
-
 Eigen::MatrixXd tsqr(int groups, int rows_per_group, int cols, const RowFill& fill) {
-  // Threads only pay off on large problems (a Monte Carlo caller already runs
-  // identifications in parallel): ≥ 2^24 flops of QR per thread.
-  const double flops = 2.0 * groups * rows_per_group * double(cols) * cols;
-  int threads = static_cast<int>(std::min<double>(std::max(1u, std::thread::hardware_concurrency()), flops / (1 << 24)));
-  threads = std::max(1, std::min(threads, groups));
-  if (threads == 1) return tsqr_range(0, groups, rows_per_group, cols, fill);
-  std::vector<Eigen::MatrixXd> parts(threads);
-  std::vector<std::thread> pool;
-  for (int t = 0; t < threads; ++t) {
-    const int a = static_cast<int>(static_cast<long long>(groups) * t / threads);
-    const int b = static_cast<int>(static_cast<long long>(groups) * (t + 1) / threads);
-    pool.emplace_back([&, t, a, b] { parts[t] = tsqr_range(a, b, rows_per_group, cols, fill); });
-  }
-  for (auto& th : pool) th.join();
-  Eigen::MatrixXd stacked(threads * cols, cols);
-  for (int t = 0; t < threads; ++t) stacked.middleRows(t * cols, cols) = parts[t];
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr(stacked);
-  return qr.matrixQR().topRows(cols).triangularView<Eigen::Upper>();
+  return numerics::streamed_qr_r(groups, rows_per_group, cols, [&](int g0, int g1, Eigen::Ref<Eigen::MatrixXd> rows) {
+    for (int g = g0; g < g1; ++g) fill(g, rows.middleRows((g - g0) * rows_per_group, rows_per_group));
+  });
 }
 
 // ---------------------------------------------------------------------------
@@ -204,7 +169,7 @@ Bases make_bases(const FrfData& d, int r, ContinuousMethod method, double omega_
   }
   b.omega_scale = omega_scale > 0 ? omega_scale : default_scale(d);
   if (!(b.omega_scale > 0) || !std::isfinite(b.omega_scale))
-    fail(ErrorKind::Input, "omega_scale", "must be positive and finite, got " + fmt(b.omega_scale));
+    fail(ErrorKind::Input, "omega_scale", "must be positive and finite, got " + fmt(b.omega_scale, 6));
   if (method == ContinuousMethod::Bilinear) {
     for (Eigen::Index k = 0; k < F; ++k) {
       const cplx st(0.0, d.omega(k) / b.omega_scale);
@@ -271,11 +236,11 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
   const Eigen::MatrixXd R = tsqr(F, 2 * c, cols, fill);
   // Assumption 3 (persistence of excitation): R11 must be non-singular. Its
   // diagonal is |R11_ii|; rank deficiency shows as a diagonal entry at the
-  // rounding level, u · √(rows) · max |R11_ii| (Householder backward error).
+  // rounding level, 100 · u · √(rows) · max |R11_ii| (Householder backward
+  // error; numerics/rank.hpp), rows = 2 F c.
   const Eigen::VectorXd r11 = R.topLeftCorner(nu, nu).diagonal().cwiseAbs();
   const double r11max = r11.maxCoeff();
-  const double floor11 = 100 * kUnitRoundoff * std::sqrt(2.0 * F * c) * r11max;
-  if (!(r11max > 0) || r11.minCoeff() <= floor11)
+  if (!numerics::numerically_full_rank(r11, std::sqrt(2.0 * F * c)))
     fail(ErrorKind::Numerical, "step 1b",
          "the input data matrix U^re is rank deficient (min |R11_ii| / max = " + fmt(r11.minCoeff() / r11max, 3) +
              "): the input does not excite r = " + std::to_string(r) +
@@ -377,8 +342,7 @@ void step3(const FrfData& d, const Bases& b, const Eigen::MatrixXd& A, const Eig
   const Eigen::VectorXd rhs = R.topRightCorner(nb + nd, 1);
   // Rank check as in step 1b (Assumption 5 (ii): a unique minimiser).
   const Eigen::VectorXd diag = R1.diagonal().cwiseAbs();
-  if (!(diag.maxCoeff() > 0) ||
-      diag.minCoeff() <= 100 * kUnitRoundoff * std::sqrt(2.0 * F * c * p) * diag.maxCoeff())
+  if (!numerics::numerically_full_rank(diag, std::sqrt(2.0 * F * c * p)))
     fail(ErrorKind::Numerical, "step 3", "B and D are not determined by the data (Eq. 17 is rank deficient, "
                                          "Pintelon 2002 Assumption 5 (ii))");
   const Eigen::VectorXd theta = R1.triangularView<Eigen::Upper>().solve(rhs);
@@ -439,16 +403,16 @@ void validate(const FrfData& d, const std::string& where) {
   const int m = d.inputs(), p = d.outputs(), c = d.columns();
   if (m < 1 || p < 1 || c < 1) fail(ErrorKind::Input, where, "needs at least one input, output and column");
   if (!(d.sample_time > 0) || !std::isfinite(d.sample_time))
-    fail(ErrorKind::Input, where, "sample time must be positive and finite, got " + fmt(d.sample_time));
+    fail(ErrorKind::Input, where, "sample time must be positive and finite, got " + fmt(d.sample_time, 6));
   std::vector<std::pair<double, int>> sorted;
   for (int k = 0; k < F; ++k) {
     const std::string at = where + " frequency " + std::to_string(k + 1);
     const double w = d.omega(k);
     if (!std::isfinite(w)) fail(ErrorKind::Input, at, "omega is not finite");
     if (d.domain == Domain::Discrete && (w < 0 || w > M_PI))
-      fail(ErrorKind::Grid, at, "omega = " + fmt(w) + " rad/sample is outside [0, pi]");
+      fail(ErrorKind::Grid, at, "omega = " + fmt(w, 6) + " rad/sample is outside [0, pi]");
     if (d.domain == Domain::Continuous && !(w > 0))
-      fail(ErrorKind::Grid, at, "omega = " + fmt(w) + " rad/s must be positive for continuous time");
+      fail(ErrorKind::Grid, at, "omega = " + fmt(w, 6) + " rad/s must be positive for continuous time");
     sorted.emplace_back(w, k);
     if (d.U[k].rows() != m || d.U[k].cols() != c || d.Y[k].rows() != p || d.Y[k].cols() != c ||
         d.variance[k].rows() != p || d.variance[k].cols() != c)
@@ -459,7 +423,7 @@ void validate(const FrfData& d, const std::string& where) {
       for (int j = 0; j < c; ++j) {
         const double v = d.variance[k](a, j);
         if (!(v > 0) || !std::isfinite(v))
-          fail(ErrorKind::Input, at, "variance " + fmt(v) + " must be positive and finite");
+          fail(ErrorKind::Input, at, "variance " + fmt(v, 6) + " must be positive and finite");
       }
   }
   std::sort(sorted.begin(), sorted.end());
@@ -525,7 +489,7 @@ StateSpace bilinear_to_continuous(const StateSpace& w, double omega_scale) {
   // Condition of I − A_w: a w-domain pole near w = 1 is a continuous pole near
   // s = ∞; refuse when it is singular to working precision.
   const double rcond = lu.rcond();
-  if (!(rcond > 10 * kUnitRoundoff))
+  if (!(rcond > numerics::kMinRcond))  // 10·u, numerics/rank.hpp
     fail(ErrorKind::Numerical, "bilinear back-transformation",
          "I - A_w is singular (reciprocal condition " + fmt(rcond, 3) +
              "): the estimate has a pole at s = infinity; try another omega_scale");
@@ -722,28 +686,16 @@ std::vector<std::vector<Eigen::VectorXcd>> period_spectra(const Eigen::MatrixXd&
       fail(ErrorKind::Input, "meta field \"excited_lines\"",
            "line " + std::to_string(k) + " is outside 1 ... P/2 = " + std::to_string(period / 2));
   const int channels = static_cast<int>(samples.cols());
-  const int bins = period / 2 + 1;
-  std::vector<double> in(period);
-  std::vector<fftw_complex> out(bins);
-  fftw_plan plan;
-  {
-    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
-    plan = fftw_plan_dft_r2c_1d(period, in.data(), out.data(), FFTW_ESTIMATE);
-  }
+  numerics::RealFft fft(period);
   const double scale = 1.0 / std::sqrt(static_cast<double>(period));  // Eq. (4)
   std::vector<std::vector<Eigen::VectorXcd>> res(periods, std::vector<Eigen::VectorXcd>(lines.size(),
                                                                                        Eigen::VectorXcd(channels)));
   for (int l = 0; l < periods; ++l)
     for (int ch = 0; ch < channels; ++ch) {
-      for (int t = 0; t < period; ++t) in[t] = samples(static_cast<Eigen::Index>(l) * period + t, ch);
-      fftw_execute(plan);
-      for (size_t i = 0; i < lines.size(); ++i)
-        res[l][i](ch) = scale * cplx(out[lines[i]][0], out[lines[i]][1]);
+      for (int t = 0; t < period; ++t) fft.time()[t] = samples(static_cast<Eigen::Index>(l) * period + t, ch);
+      fft.forward();
+      for (size_t i = 0; i < lines.size(); ++i) res[l][i](ch) = scale * fft.freq()[lines[i]];
     }
-  {
-    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
-    fftw_destroy_plan(plan);
-  }
   return res;
 }
 
@@ -802,7 +754,7 @@ SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, c
     if (!seen.insert(k).second)
       fail(ErrorKind::Input, "meta field \"excited_lines\"", "line " + std::to_string(k) + " is listed twice");
   if (!(meta.sample_time > 0) || !std::isfinite(meta.sample_time))
-    fail(ErrorKind::Input, "meta field \"sample_time\"", "must be positive, got " + fmt(meta.sample_time));
+    fail(ErrorKind::Input, "meta field \"sample_time\"", "must be positive, got " + fmt(meta.sample_time, 6));
   if (inputs < 1 || inputs >= samples.cols())
     fail(ErrorKind::Input, "data", "needs at least one input and one output column");
   const auto spectra = period_spectra(samples, meta.period, meta.periods, meta.excited_lines);

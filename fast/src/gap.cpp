@@ -1,22 +1,20 @@
 #include "fdsid/gap.hpp"
 
-#include <fftw3.h>
-
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <boost/math/distributions/students_t.hpp>
-#include <boost/math/tools/minima.hpp>
 #include <cmath>
 #include <cstring>
 #include <functional>
 #include <map>
-#include <mutex>
 #include <numeric>
 #include <tuple>
 
 #include "fdsid/error.hpp"
-#include "fftw_lock.hpp"
+#include "numerics/constants.hpp"
+#include "numerics/fft.hpp"
+#include "numerics/optimize.hpp"
 
 namespace fdsid {
 
@@ -117,50 +115,10 @@ struct Spectra {
   Eigen::MatrixXd u_time;    // P × M input samples (for the input polynomial)
 };
 
-// One r2c/c2r pair of plans of length P, used under the planner lock only for
-// creation and destruction.
-class Fft {
- public:
-  explicit Fft(int P) : P_(P), in_(P), out_(P / 2 + 1) {
-    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
-    r2c_ = fftw_plan_dft_r2c_1d(P, in_.data(), out_.data(), FFTW_ESTIMATE);
-    c2r_ = fftw_plan_dft_c2r_1d(P, out_.data(), in_.data(), FFTW_ESTIMATE);
-  }
-  ~Fft() {
-    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
-    fftw_destroy_plan(r2c_);
-    fftw_destroy_plan(c2r_);
-  }
-  Fft(const Fft&) = delete;
-  Fft& operator=(const Fft&) = delete;
-  // Eq. (4): X(k) = (1/√P) Σ_t x(t) e^{−j2πkt/P}, k = 0 … P/2.
-  Eigen::VectorXcd forward(const Eigen::VectorXd& x) {
-    for (int t = 0; t < P_; ++t) in_[t] = x(t);
-    fftw_execute(r2c_);
-    Eigen::VectorXcd X(P_ / 2 + 1);
-    const double s = 1.0 / std::sqrt(static_cast<double>(P_));
-    for (int k = 0; k <= P_ / 2; ++k) X(k) = s * cplx(out_[k][0], out_[k][1]);
-    return X;
-  }
-  // The inverse of forward for a real signal.
-  Eigen::VectorXd inverse(const Eigen::VectorXcd& X) {
-    const double s = 1.0 / std::sqrt(static_cast<double>(P_));
-    for (int k = 0; k <= P_ / 2; ++k) {
-      out_[k][0] = s * X(k).real();
-      out_[k][1] = s * X(k).imag();
-    }
-    out_[0][1] = 0;
-    if (P_ % 2 == 0) out_[P_ / 2][1] = 0;
-    fftw_execute(c2r_);
-    return Eigen::Map<Eigen::VectorXd>(in_.data(), P_);
-  }
-
- private:
-  int P_;
-  std::vector<double> in_;
-  std::vector<fftw_complex> out_;
-  fftw_plan r2c_, c2r_;
-};
+// The unitary DFT of one period (Eq. 4) and the optimisers: numerics/.
+using Fft = numerics::UnitaryFft;
+using numerics::minimize_1d;
+using numerics::nelder_mead;
 
 // The augmented model: G = Π mult_e · (base + Σ add_e), one factor or term per
 // linear effect e (so an effect can be taken out and refitted), plus a
@@ -357,67 +315,6 @@ void additive_target(const Spectra& s, const Weighted& W, const Eigen::VectorXcd
     X(i) = mult(k) * W.U(i);
     R(i) = W.T(i) - G(k) * W.U(i);
   }
-}
-
-// Minimum of f over [lo, hi]: a grid of n points, then Brent (Boost) between
-// the neighbours of the best grid point.
-std::pair<double, double> minimize_1d(const std::function<double(double)>& f, double lo, double hi, int n) {
-  double best = lo, fbest = f(lo);
-  const double h = (hi - lo) / (n - 1);
-  for (int i = 1; i < n; ++i) {
-    const double x = lo + i * h, v = f(x);
-    if (v < fbest) {
-      fbest = v;
-      best = x;
-    }
-  }
-  const auto r =
-      boost::math::tools::brent_find_minima(f, std::max(lo, best - h), std::min(hi, best + h), 40);
-  return r.second < fbest ? r : std::make_pair(best, fbest);
-}
-
-// Nelder–Mead simplex minimisation in two variables (no Debian library offers
-// one; Boost.Math has one-dimensional minimisers only).
-Eigen::Vector2d nelder_mead(const std::function<double(const Eigen::Vector2d&)>& f, Eigen::Vector2d x0,
-                            Eigen::Vector2d step, int iterations = 200) {
-  std::array<Eigen::Vector2d, 3> x = {x0, x0 + Eigen::Vector2d(step(0), 0), x0 + Eigen::Vector2d(0, step(1))};
-  std::array<double, 3> v = {f(x[0]), f(x[1]), f(x[2])};
-  for (int it = 0; it < iterations; ++it) {
-    std::array<int, 3> o = {0, 1, 2};
-    std::sort(o.begin(), o.end(), [&](int a, int b) { return v[a] < v[b]; });
-    const int b = o[0], m = o[1], w = o[2];
-    if (std::abs(v[w] - v[b]) <= 1e-12 * std::abs(v[b]) + 1e-300) break;
-    const Eigen::Vector2d c = 0.5 * (x[b] + x[m]);
-    const Eigen::Vector2d r = c + (c - x[w]);
-    const double fr = f(r);
-    if (fr < v[b]) {
-      const Eigen::Vector2d e = c + 2.0 * (c - x[w]);
-      const double fe = f(e);
-      if (fe < fr) {
-        x[w] = e;
-        v[w] = fe;
-      } else {
-        x[w] = r;
-        v[w] = fr;
-      }
-    } else if (fr < v[m]) {
-      x[w] = r;
-      v[w] = fr;
-    } else {
-      const Eigen::Vector2d k = c + 0.5 * (x[w] - c);
-      const double fk = f(k);
-      if (fk < v[w]) {
-        x[w] = k;
-        v[w] = fk;
-      } else {
-        for (int i : {m, w}) {
-          x[i] = x[b] + 0.5 * (x[i] - x[b]);
-          v[i] = f(x[i]);
-        }
-      }
-    }
-  }
-  return x[std::min_element(v.begin(), v.end()) - v.begin()];
 }
 
 // A candidate effect on top of a state: the new state and its fit.
@@ -924,7 +821,7 @@ class Diagnosis {
       std::vector<int> others;
       for (int q : later)
         if (q != j) others.push_back(q);
-      g.push_back(std::log(F_of(j, others) + 1e-12));
+      g.push_back(std::log(F_of(j, others) + numerics::kNegligibleRelative));
     }
     const double J = static_cast<double>(g.size());
     const double mu = std::accumulate(g.begin(), g.end(), 0.0) / J;
@@ -932,7 +829,7 @@ class Diagnosis {
     for (double v : g) ss += (v - mu) * (v - mu);
     const double sd = std::sqrt(ss / (J - 1));
     if (!(sd > 0)) return 1.0;
-    const double T = (std::log(F + 1e-12) - mu) / (sd * std::sqrt(1 + 1 / J));
+    const double T = (std::log(F + numerics::kNegligibleRelative) - mu) / (sd * std::sqrt(1 + 1 / J));
     return boost::math::cdf(boost::math::complement(boost::math::students_t(J - 1), T));
   }
 
@@ -1036,14 +933,15 @@ void check_inputs(const StateSpace& model, const Eigen::MatrixXd& record, int in
 
 // A noise floor must exist: periods identical to rounding give s² ≈ 0.
 // Method: the median over the excited lines of s²(k) against that of |Ȳ(k)|²
-// (relative threshold 1e-24, far below any measured record).
+// (relative threshold numerics::kNegligibleVarianceRatio = 1e-24, far below any
+// measured record: periods that agree to 1e-12 in amplitude).
 // Fails: Error(Input) on "data" when s² vanishes or t(k) is not finite.
 void require_noise_floor(const Spectra& s, const LineStats& st0) {
   std::vector<double> v(st0.var.data(), st0.var.data() + st0.var.size()), y;
   for (int k : s.exc) y.push_back(std::norm(s.Y.col(k).mean()));
   std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
   std::nth_element(y.begin(), y.begin() + y.size() / 2, y.end());
-  if (!(v[v.size() / 2] > 1e-24 * y[y.size() / 2]) || !st0.t.allFinite())
+  if (!(v[v.size() / 2] > numerics::kNegligibleVarianceRatio * y[y.size() / 2]) || !st0.t.allFinite())
     throw Error(ErrorKind::Input, "data",
                 "the periods do not vary (sample variance " + std::to_string(v[v.size() / 2]) +
                     " at the median excited line): no noise floor to measure the gap against; the gap diagnosis "

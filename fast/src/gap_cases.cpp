@@ -1,16 +1,13 @@
 #include "fdsid/gap_cases.hpp"
 
-#include <fftw3.h>
-
 #include <algorithm>
 #include <cmath>
-#include <mutex>
 #include <numeric>
 #include <random>
 #include <set>
 
 #include "fdsid/error.hpp"
-#include "fftw_lock.hpp"
+#include "numerics/fft.hpp"
 
 namespace fdsid {
 
@@ -156,55 +153,9 @@ StateSpace realise(const Base& b) {
 }
 
 // ---------------------------------------------------------------------------
-// FFT of one period, unitary: X(k) = P^{-1/2} Σ x(t) e^{−j2πkt/P}, k = 0 … P/2.
-class Fft {
- public:
-  explicit Fft(int P) : P_(P), scale_(1.0 / std::sqrt(static_cast<double>(P))) {
-    r_ = fftw_alloc_real(static_cast<std::size_t>(P));
-    c_ = fftw_alloc_complex(static_cast<std::size_t>(P / 2 + 1));
-    if (!r_ || !c_) throw Error(ErrorKind::Resource, kWhere, "FFTW could not allocate its buffers");
-    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
-    fwd_ = fftw_plan_dft_r2c_1d(P, r_, c_, FFTW_ESTIMATE);
-    bwd_ = fftw_plan_dft_c2r_1d(P, c_, r_, FFTW_ESTIMATE);
-  }
-  ~Fft() {
-    {
-      std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
-      fftw_destroy_plan(fwd_);
-      fftw_destroy_plan(bwd_);
-    }
-    fftw_free(r_);
-    fftw_free(c_);
-  }
-  Fft(const Fft&) = delete;
-  Fft& operator=(const Fft&) = delete;
-
-  std::vector<cplx> forward(const double* x) {
-    std::copy(x, x + P_, r_);
-    fftw_execute(fwd_);
-    std::vector<cplx> X(static_cast<std::size_t>(P_ / 2 + 1));
-    for (std::size_t k = 0; k < X.size(); ++k) X[k] = scale_ * cplx(c_[k][0], c_[k][1]);
-    return X;
-  }
-  /// Inverse of forward for a real signal (the imaginary parts at DC and P/2 are ignored).
-  std::vector<double> inverse(const std::vector<cplx>& X) {
-    for (std::size_t k = 0; k < X.size(); ++k) {
-      c_[k][0] = X[k].real();
-      c_[k][1] = X[k].imag();
-    }
-    fftw_execute(bwd_);
-    std::vector<double> x(r_, r_ + P_);
-    for (double& v : x) v *= scale_;
-    return x;
-  }
-
- private:
-  int P_;
-  double scale_;
-  double* r_ = nullptr;
-  fftw_complex* c_ = nullptr;
-  fftw_plan fwd_ = nullptr, bwd_ = nullptr;
-};
+// FFT of one period, unitary: X(k) = P^{-1/2} Σ x(t) e^{−j2πkt/P}, k = 0 … P/2
+// (numerics/fft.hpp).
+using Fft = numerics::UnitaryFft;
 
 // ---------------------------------------------------------------------------
 // Effects: parameters drawn at magnitude 1, scaled by `scale` ∈ [0, scale_max]
@@ -1058,7 +1009,7 @@ GapCase make_gap_case(const GapCaseOptions& o) {
   validate_options(o);
   Draw d(o.seed);
   Draw dn(splitmix64(o.seed));  // the noise stream
-  Fft fft(o.period);
+  Fft fft(o.period, kWhere);
   Setting st = draw_excitation(d, o.period, o.periods, fft);
   // Resonances inside the excited band.
   const double w_band = kTwoPi * st.K / st.P;

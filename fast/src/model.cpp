@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "fdsid/error.hpp"
+#include "numerics/lyapunov.hpp"
 
 namespace fdsid {
 
@@ -80,22 +81,8 @@ Eigen::VectorXcd zeros(const StateSpace& m) {
   return sorted_by_modulus(std::move(v));
 }
 
-Eigen::MatrixXd lyapunov(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q) {
-  const auto n = A.rows();
-  if (n == 0) return Eigen::MatrixXd(0, 0);
-  const double rho = A.eigenvalues().cwiseAbs().maxCoeff();
-  if (!(rho < 1.0))
-    throw Error(ErrorKind::Numerical, "lyapunov", "A is not stable (spectral radius " + std::to_string(rho) + ")");
-  // Smith doubling: after k steps P = sum_{j < 2^k} A^j Q A^{jT}; the neglected
-  // tail is bounded by ||A^{2^k}||^2 ||P||, so stop when ||A_k||_F^2 <= u.
-  Eigen::MatrixXd P = Q, Ak = A;
-  for (int it = 0; it < 64; ++it) {
-    P += Ak * P * Ak.transpose();
-    Ak = (Ak * Ak).eval();
-    if (Ak.squaredNorm() <= 1e-32) break;
-  }
-  return 0.5 * (P + P.transpose());
-}
+// Smith doubling, in numerics/lyapunov.hpp.
+Eigen::MatrixXd lyapunov(const Eigen::MatrixXd& A, const Eigen::MatrixXd& Q) { return numerics::stein_smith(A, Q); }
 
 SpectralSummands spectral_summands(const StateSpace& m) {
   SpectralSummands s;

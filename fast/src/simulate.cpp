@@ -1,13 +1,10 @@
 #include "fdsid/simulate.hpp"
 
-#include <fftw3.h>
-
 #include <cmath>
-#include <mutex>
 #include <random>
 
 #include "fdsid/error.hpp"
-#include "fftw_lock.hpp"
+#include "numerics/fft.hpp"
 
 namespace fdsid {
 
@@ -29,26 +26,17 @@ Eigen::MatrixXd simulate_periodic_record(const StateSpace& model, const RecordOp
   std::mt19937_64 gen(o.seed);
   std::uniform_real_distribution<double> phase(0.0, 2 * M_PI);
   const int bins = P / 2 + 1;
-  std::vector<fftw_complex> U(bins), Y(bins);
-  for (int k = 0; k < bins; ++k) U[k][0] = U[k][1] = Y[k][0] = Y[k][1] = 0;
+  // One period of u and y by unnormalised c2r transforms of their lines.
+  numerics::RealFft fu(P), fy(P);
+  for (int k = 0; k < bins; ++k) fu.freq()[k] = fy.freq()[k] = 0;
   for (int k : lines) {
     const cplx u = std::polar(1.0, phase(gen));
-    const cplx y = transfer(model, std::polar(1.0, 2 * M_PI * k / P))(0, 0) * u;
-    U[k][0] = u.real();
-    U[k][1] = u.imag();
-    Y[k][0] = y.real();
-    Y[k][1] = y.imag();
+    fu.freq()[k] = u;
+    fy.freq()[k] = transfer(model, std::polar(1.0, 2 * M_PI * k / P))(0, 0) * u;
   }
-  std::vector<double> u(P), y(P);
-  {
-    std::lock_guard<std::mutex> lock(detail::fftw_planner_mutex());
-    fftw_plan pu = fftw_plan_dft_c2r_1d(P, U.data(), u.data(), FFTW_ESTIMATE);
-    fftw_plan py = fftw_plan_dft_c2r_1d(P, Y.data(), y.data(), FFTW_ESTIMATE);
-    fftw_execute(pu);
-    fftw_execute(py);
-    fftw_destroy_plan(pu);
-    fftw_destroy_plan(py);
-  }
+  fu.backward();
+  fy.backward();
+  const std::vector<double> u(fu.time(), fu.time() + P), y(fy.time(), fy.time() + P);
   double ss = 0;
   for (double v : u) ss += v * v;
   const double scale = o.rms / std::sqrt(ss / P);

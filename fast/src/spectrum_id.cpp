@@ -1,75 +1,30 @@
 // Akçay (2011) Algorithm 1 and Van Overschee et al. (1997), double precision.
 #include "fdsid/spectrum_id.hpp"
 
-#include <fftw3.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <memory>
-#include <mutex>
 #include <sstream>
+#include <utility>
 
 #include "fdsid/compare.hpp"
 #include "fdsid/error.hpp"
-#include "fftw_lock.hpp"
+#include "numerics/constants.hpp"
+#include "numerics/fft.hpp"
+#include "numerics/format.hpp"
+#include "numerics/qr.hpp"
+#include "numerics/rank.hpp"
+#include "numerics/riccati.hpp"
 
 namespace fdsid {
 
-std::mutex& detail::fftw_planner_mutex() {
-  static std::mutex m;
-  return m;
-}
-
 namespace {
 
-constexpr double kUnitRoundoff = std::numeric_limits<double>::epsilon() / 2;
+using numerics::fmt;
+using numerics::kUnitRoundoff;
 // Largest side of 𝒴 (p m, r m) whose SVD fdsid attempts (≈ 1 min of Jacobi sweeps here).
 constexpr int kMaxSvdDimension = 2000;
-
-std::string fmt(double x, int digits = 4) {
-  std::ostringstream s;
-  s.precision(digits);
-  s << x;
-  return s.str();
-}
-
-using detail::fftw_planner_mutex;
-
-struct FftwFree;
-
-// A c2r plan for `howmany` interleaved transforms of length N, made once per
-// (N, howmany) under the planner lock and kept for the life of the process.
-// The plans live until the process exits; the cache destroys them then (so
-// LeakSanitizer, e.g. in the fuzz targets, sees no leak).
-struct PlanCache : std::map<std::pair<int, int>, fftw_plan> {
-  ~PlanCache() {
-    for (auto& kv : *this) fftw_destroy_plan(kv.second);
-  }
-};
-
-fftw_plan c2r_plan(int N, int howmany) {
-  static PlanCache cache;
-  std::lock_guard<std::mutex> lock(fftw_planner_mutex());
-  auto it = cache.find({N, howmany});
-  if (it != cache.end()) return it->second;
-  const size_t M1 = static_cast<size_t>(N / 2 + 1) * howmany;
-  fftw_complex* in = fftw_alloc_complex(M1);
-  double* out = fftw_alloc_real(static_cast<size_t>(N) * howmany);
-  fftw_plan plan = in && out ? fftw_plan_many_dft_c2r(1, &N, howmany, in, nullptr, howmany, 1, out, nullptr, howmany, 1,
-                                                      FFTW_ESTIMATE)
-                             : nullptr;
-  fftw_free(in);
-  fftw_free(out);
-  if (!plan) throw Error(ErrorKind::Numerical, "step 2", "FFTW could not plan a transform of length " + std::to_string(N));
-  cache.emplace(std::make_pair(N, howmany), plan);
-  return plan;
-}
-
-struct FftwFree {
-  void operator()(void* p) const { fftw_free(p); }
-};
 
 // A block of the real block-diagonal form of Â: a 1x1 block (real eigenvalue a)
 // or a 2x2 block [[a, b], [-b, a]] for the pair a ± ib.
@@ -245,77 +200,6 @@ void sqrt_spd(const Eigen::MatrixXd& X, Eigen::MatrixXd& root, Eigen::MatrixXd& 
   inv_root = es.eigenvectors() * l.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
 }
 
-Eigen::MatrixXd riccati_map(const SpectralSummands& s, const Eigen::MatrixXd& P) {
-  const Eigen::MatrixXd K = s.F - s.A * P * s.C.transpose();
-  const Eigen::MatrixXd R = s.E - s.C * P * s.C.transpose();
-  return s.A * P * s.A.transpose() + K * R.ldlt().solve(K.transpose());
-}
-
-double riccati_residual(const SpectralSummands& s, const Eigen::MatrixXd& P) {
-  const double scale = std::max(P.norm(), s.F.norm() * s.F.norm() / std::max(s.E.norm(), 1e-300));
-  return (P - riccati_map(s, P)).norm() / std::max(scale, 1e-300);
-}
-
-// Step 9 by SDA. With X = -P the equation
-//   P = A P A^T + (F - A P C^T)(E - C P C^T)^{-1}(F - A P C^T)^T
-// becomes the control-type DARE X = Â^T X (I + G X)^{-1} Â + H with
-//   Â = A^T - C^T E^{-1} F^T,  G = C^T E^{-1} C,  H = -F E^{-1} F^T,
-// whose stabilising solution makes A - K C (K = (F - APC^T)(E - CPC^T)^{-1})
-// stable, i.e. the spectral factor minimum phase. Doubling:
-//   W = I + G_k H_k, A_{k+1} = A_k W^{-1} A_k, G_{k+1} = G_k + A_k W^{-1} G_k A_k^T,
-//   H_{k+1} = H_k + A_k^T H_k W^{-1} A_k,  H_k -> X quadratically.
-bool riccati_sda(const SpectralSummands& s, Eigen::MatrixXd& P, int& iterations) {
-  const auto n = s.A.rows();
-  const Eigen::LDLT<Eigen::MatrixXd> Einv(s.E);
-  Eigen::MatrixXd Ak = s.A.transpose() - s.C.transpose() * Einv.solve(s.F.transpose());
-  Eigen::MatrixXd Gk = s.C.transpose() * Einv.solve(s.C);
-  Eigen::MatrixXd Hk = -s.F * Einv.solve(s.F.transpose());
-  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
-  for (iterations = 1; iterations <= 100; ++iterations) {
-    const Eigen::PartialPivLU<Eigen::MatrixXd> W(I + Gk * Hk);
-    if (!(std::abs(W.determinant()) > 1e-12)) return false;
-    const Eigen::MatrixXd WA = W.solve(Ak);          // W^{-1} A_k
-    const Eigen::MatrixXd WG = W.solve(Gk);          // W^{-1} G_k
-    const Eigen::MatrixXd Anext = Ak * WA;
-    const Eigen::MatrixXd Gnext = Gk + Ak * WG * Ak.transpose();
-    const Eigen::MatrixXd Hnext = Hk + Ak.transpose() * Hk * WA;
-    const double change = (Hnext - Hk).norm();
-    Ak = Anext;
-    Gk = 0.5 * (Gnext + Gnext.transpose());
-    Hk = 0.5 * (Hnext + Hnext.transpose());
-    if (!Hk.allFinite()) return false;
-    if (change <= 4 * kUnitRoundoff * Hk.norm() || Ak.norm() <= kUnitRoundoff) break;
-  }
-  P = -Hk;
-  return iterations <= 100;
-}
-
-// Fall-back: the Riccati difference (Kalman filter) iteration from P = 0, which
-// increases monotonically to the minimal solution when Ŝ > 0 on the circle.
-bool riccati_kalman(const SpectralSummands& s, Eigen::MatrixXd& P, int& iterations) {
-  P = Eigen::MatrixXd::Zero(s.A.rows(), s.A.rows());
-  // The iteration converges linearly, the change shrinking by ρ² per step (ρ
-  // the spectral radius of the closed loop). It is stopped as failed when the
-  // change has not halved over a window of 1000 steps (ρ > 0.99965: a pole of
-  // the factor within 3.5e-4 of the circle, beyond what double precision
-  // resolves anyway) or P grows without bound, instead of running all 10⁵ steps.
-  constexpr int kWindow = 1000;
-  double window_start_change = std::numeric_limits<double>::infinity();
-  for (iterations = 1; iterations <= 100000; ++iterations) {
-    const Eigen::MatrixXd next = riccati_map(s, P);
-    if (!next.allFinite()) return false;
-    const double change = (next - P).norm();
-    P = 0.5 * (next + next.transpose());
-    if (change <= 4 * kUnitRoundoff * std::max(P.norm(), 1e-300)) return true;
-    if (!(P.norm() < 1e150)) return false;
-    if (iterations % kWindow == 0) {
-      if (!(change < 0.5 * window_start_change)) return false;
-      window_start_change = change;
-    }
-  }
-  return false;
-}
-
 }  // namespace
 
 const char* to_string(Method m) { return m == Method::Akcay2011 ? "akcay2011" : "vo1997"; }
@@ -349,8 +233,8 @@ namespace {
 // identification of the same size then touches no fresh pages (at M = 10^6 the
 // page faults of two new 16 MB arrays cost about half an FFT).
 struct FftWorkspace {
-  std::unique_ptr<fftw_complex, FftwFree> in;
-  std::unique_ptr<double, FftwFree> out;
+  numerics::ComplexBuffer in;
+  numerics::RealBuffer out;
   size_t in_size = 0, out_size = 0;
 };
 
@@ -362,11 +246,11 @@ const double* unscaled_fourier_coefficients(const SpectrumData& data, Extension 
   thread_local FftWorkspace ws;
   const size_t in_size = static_cast<size_t>(mm) * (M + 1), out_size = static_cast<size_t>(mm) * N;
   if (ws.in_size < in_size) {
-    ws.in.reset(fftw_alloc_complex(in_size));
+    ws.in = numerics::alloc_complex(in_size);
     ws.in_size = ws.in ? in_size : 0;
   }
   if (ws.out_size < out_size) {
-    ws.out.reset(fftw_alloc_real(out_size));
+    ws.out = numerics::alloc_real(out_size);
     ws.out_size = ws.out ? out_size : 0;
   }
   if (!ws.in || !ws.out)
@@ -377,15 +261,13 @@ const double* unscaled_fourier_coefficients(const SpectrumData& data, Extension 
       for (int a = 0; a < m; ++a) {
         const cplx v = ext == Extension::HermitianPart ? 0.5 * (data.at(a, b, k) + std::conj(data.at(b, a, k)))
                                                        : data.at(a, b, k);
-        fftw_complex& dst = ws.in.get()[static_cast<size_t>(k) * mm + a + m * b];
-        dst[0] = v.real();
-        dst[1] = v.imag();
+        ws.in[static_cast<size_t>(k) * mm + a + m * b] = v;
       }
   // Eq. (20): ŝ_k = (1/N) sum_j e^{+i 2π jk/N} S_j is FFTW's unnormalised backward
   // transform; c2r reads samples 0..M and supplies S_{N-j} = conj(S_j).
-  // Plans are cached per (N, m^2) and executed on these (fftw_alloc-aligned)
-  // arrays with the new-array interface, which is thread-safe.
-  fftw_execute_dft_c2r(c2r_plan(N, mm), ws.in.get(), ws.out.get());
+  // Plans are cached per (N, m^2) by numerics::c2r_many and executed on these
+  // (FFTW-aligned) arrays with the new-array interface, which is thread-safe.
+  numerics::c2r_many(N, mm, ws.in.get(), ws.out.get(), "step 2");
   return ws.out.get();
 }
 
@@ -594,32 +476,32 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
   // Step 8: Ê, F̂ by least squares over all M+1 samples (chunked Householder QR).
   SummandDesign design(Chat, blocks, m);
   const int q = design.unknowns(), rps = design.rows_per_sample();
-  // TSQR: R of [R; next chunk of rows] by one Householder QR per chunk, in a
-  // fixed work matrix (unused rows of a last, partial chunk are zero and leave R
-  // unchanged).
+  // R of the augmented design [Φ | y] by the streamed QR (numerics/qr.hpp), one
+  // group per grid sample, one block (the fill walks the grid per chunk) and
+  // 1024 rows per chunk, the chunking this step has always used.
   if (static_cast<long long>(M + 1) * rps < q)
     throw Error(ErrorKind::Dimension, "step 8", "fewer equations than unknowns in the E, F fit");
-  const int chunk = std::max(1, 1024 / rps);
-  const int top = q + 1;
-  Eigen::MatrixXd work = Eigen::MatrixXd::Zero(top + chunk * rps, q + 1);
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr(work.rows(), work.cols());
-  Eigen::VectorXd y(rps);
-  for (int k0 = 0; k0 <= M; k0 += chunk) {
-    const int kn = std::min(chunk, M + 1 - k0);
-    if (kn < chunk) work.bottomRows((chunk - kn) * rps).setZero();
+  numerics::StreamedQrOptions qr_options;
+  qr_options.rows_per_chunk = 1024;
+  qr_options.flops_per_block = 0;
+  const numerics::ChunkFill fill = [&](int k0, int k1, Eigen::Ref<Eigen::MatrixXd> rows) {
+    Eigen::VectorXd y(rps);
     GridWalker grid(k0, M);
-    for (int j = 0; j < kn; ++j, grid.next()) {
-      auto blk = work.block(top + j * rps, 0, rps, q + 1);
+    for (int j = 0; j < k1 - k0; ++j, grid.next()) {
+      auto blk = rows.middleRows(j * rps, rps);
       design.rows(grid.z(), &data, k0 + j, blk.leftCols(q), y);
       blk.col(q) = y;
     }
-    qr.compute(work);
-    work.topRows(top) = qr.matrixQR().topRows(top).triangularView<Eigen::Upper>();
-  }
-  const Eigen::MatrixXd R = work.topRows(top);
+  };
+  const Eigen::MatrixXd R = numerics::streamed_qr_r(M + 1, rps, q + 1, fill, qr_options);
   const Eigen::MatrixXd Rq = R.topLeftCorner(q, q);
-  const double rmax = Rq.diagonal().cwiseAbs().maxCoeff(), rmin = Rq.diagonal().cwiseAbs().minCoeff();
-  if (!(rmin > 1e3 * kUnitRoundoff * rmax))
+  const Eigen::VectorXd rdiag = Rq.diagonal().cwiseAbs();
+  const double rmax = rdiag.maxCoeff(), rmin = rdiag.minCoeff();
+  // Rank test of numerics/rank.hpp with size factor 10 (floor 1e3·u·max|r_ii|,
+  // the value this step has always used). The √rows factor of the Householder
+  // bound would be √((M+1)·rps), larger than 10 whenever (M+1)·rps > 100; it is
+  // kept at 10 so that no result changes (see the numerics layer's report).
+  if (!numerics::numerically_full_rank(rdiag, 10.0))
     throw Error(ErrorKind::Numerical, "step 8", "E, F least-squares problem is rank deficient (|r_min|/|r_max| = " +
                                                     fmt(rmin / rmax, 3) + ")");
   const Eigen::VectorXd theta = Rq.triangularView<Eigen::Upper>().solve(R.col(q).head(q));
@@ -668,24 +550,17 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
                                                        fmt(eE.eigenvalues()(0), 4) + ")");
   }
 
-  // Step 9: Riccati equation.
-  Eigen::MatrixXd P;
-  int its = 0;
-  bool ok = riccati_sda(s, P, its);
-  res.riccati_method = "sda";
-  if (ok) {
-    const Eigen::MatrixXd Rinn = s.E - s.C * P * s.C.transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eR(Rinn, Eigen::EigenvaluesOnly);
-    ok = eR.eigenvalues()(0) > 0.0 && riccati_residual(s, P) <= 1e-8;
-  }
-  if (!ok) {
-    ok = riccati_kalman(s, P, its);
-    res.riccati_method = "riccati-difference-iteration";
-  }
-  if (!ok) throw Error(ErrorKind::Riccati, "step 9", "no stabilising solution found (SDA and Kalman iteration failed)");
+  // Step 9: Riccati equation (numerics/riccati.hpp: SDA, else the Riccati
+  // difference iteration).
+  const numerics::RiccatiOptions riccati_options;
+  numerics::RiccatiSolution sol = numerics::solve_spectral_riccati(s, riccati_options);
+  res.riccati_method = sol.method;
+  const int its = sol.iterations;
+  if (!sol.ok) throw Error(ErrorKind::Riccati, "step 9", "no stabilising solution found (SDA and Kalman iteration failed)");
+  const Eigen::MatrixXd P = std::move(sol.P);
   s.P = P;
   res.riccati_iterations = its;
-  res.riccati_residual = riccati_residual(s, P);
+  res.riccati_residual = numerics::riccati_residual(s, P);
   const Eigen::MatrixXd Rinn = s.E - s.C * P * s.C.transpose();
   {
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eR(Rinn, Eigen::EigenvaluesOnly);
@@ -743,7 +618,8 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
     if (n > 0 && res.split_margin < 1e-3)
       res.warnings.push_back("poles within " + fmt(res.split_margin, 3) +
                              " of the unit circle: the split of step 6 and the poles are ill-conditioned");
-    if (res.riccati_residual > 1e-8)
+    // The text names the default accept_residual, 1e-8 (riccati.hpp).
+    if (res.riccati_residual > riccati_options.accept_residual)
       res.warnings.push_back("Riccati residual " + fmt(res.riccati_residual, 3) + " above 1e-8 (step 9)");
   }
   return res;
