@@ -7,10 +7,15 @@
 #include "common.hpp"
 #include "fdsid/error.hpp"
 
+#ifndef FDSID_VERSION
+#define FDSID_VERSION "unknown"
+#endif
+
 int main(int argc, char** argv) {
   using namespace fdsid::cli;
   CLI::App app{"fdsid: frequency-domain subspace identification (Akcay 2011, Pintelon 2002)"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", "fdsid " FDSID_VERSION);
   Action chosen;
   register_reproduce(app, chosen);
   register_identify_frf(app, chosen);
@@ -26,6 +31,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     std::cerr << "fdsid: " << e.what() << "\n";

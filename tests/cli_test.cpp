@@ -501,6 +501,13 @@ TEST_F(Cli, UnknownOption) {
 
 TEST_F(Cli, NonIntegerP) { EXPECT_TRUE(IsBadInput(identify(good_spectrum(), {"--p", "abc"}), {"--p"})); }
 
+TEST_F(Cli, VersionExitsZero) {
+  const RunResult r = run_fdsid({"--version"});
+  EXPECT_TRUE(Succeeded(r));
+  EXPECT_EQ(r.out.rfind("fdsid ", 0), 0u) << r.out;
+  EXPECT_EQ(r.err, "");
+}
+
 TEST_F(Cli, HelpExitsZero) {
   const RunResult r = run_fdsid({"--help"});
   EXPECT_TRUE(Succeeded(r));
