@@ -154,13 +154,16 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
   idf->add_option("--omega-scale", o.omega_scale, "frequency scaling of Algorithm 2 (default sqrt(w_min w_max))");
   idf->add_option("--precision", c->precision, "double (default) or high")
       ->transform(choice(kPrecisions, "is not double or high"));
-  auto* eiv = idf->add_flag("--eiv", c->eiv, "noisy input: identify from G = Y/U with the variance of Eq. (31) (Section 5)");
+  auto* eiv = idf->add_flag("--eiv", c->eiv,
+                            "noisy input: identify from G = Y/U with the variance of Eq. (31) (Section 5; needs "
+                            "--data, --meta: the input noise is estimated over the periods)");
   idf->add_option("--eiv-variance", c->eiv_variance,
                   "data (Eq. 31 from the noisy ratio) or model (re-evaluated at a first-pass model: consistent)")
       ->transform(choice(std::map<std::string, EivVariance>{{"data", EivVariance::Data}, {"model", EivVariance::Model}},
                          "is not data or model"));
   auto* improper =
-      idf->add_flag("--improper", c->improper, "improper G: identify 1/G by swapping input and output (Section 5)");
+      idf->add_flag("--improper", c->improper,
+                    "improper G: identify 1/G by swapping input and output (Section 5; needs --data, --meta)");
   // Both need periodic records: the input noise is estimated over the periods.
   eiv->needs(data)->excludes(improper);
   improper->needs(data);
