@@ -9,10 +9,12 @@
 #include "fdsid/error.hpp"
 #include "fdsid/io.hpp"
 #include "fdsid/frf_id.hpp"
+#include "fdsid/json.hpp"
 #include "fdsid/reference/frf_id.hpp"
 #include "fdsid/reference/io.hpp"
 #include "fdsid/reference/spectrum_id.hpp"
 #include "fdsid/spectrum_id.hpp"
+#include "fdsid/workflow.hpp"
 
 namespace fdsid::cli {
 
@@ -95,57 +97,36 @@ int check(const std::string& json_path, const std::string& model_path, const std
 
   int m = 0, M = 0;
   const reference::Result res = run_reference(data_path, candidate.order(), p, r, vo, ext, m, M);
-  const json rj = reference::result_to_json(res, vo, 40);
-  const StateSpace ref = model_from_json(rj, "reference model");  // decimal strings, correctly rounded
-  const ModelComparison c = compare_models(candidate, ref);
+  OracleCheck k;
+  k.candidate_path = model_path;
+  k.data_path = data_path;
+  k.p = p;
+  k.r = r;
+  k.method = vo ? Method::VanOverschee1997 : Method::Akcay2011;
+  k.extension = ext;
+  k.reference_model = reference::result_to_json(res, vo, 40);
+  const StateSpace ref = model_from_json(k.reference_model, "reference model");  // decimal strings, correctly rounded
+  k.comparison = compare_models(candidate, ref);
 
   // Default tolerance: what a correct double-precision implementation reaches on
-  // these data (compare.hpp), with σ1/σ_2n from the reference's 𝒴 or Ĝ_pF_r; the
-  // poles and Markov parameters get the eigenvalue condition number of Â on top.
+  // these data (compare.hpp), with sigma1/sigma_2n from the reference's singular
+  // values; the poles and Markov parameters get the eigenvalue condition number of A on top.
   const int n = res.order;
-  const double ratio = to_double(rj["singular_values"][0]) / to_double(rj["singular_values"][2 * n - 1]);
-  const double spectrum_tol = tolerance > 0 ? tolerance : double_precision_spectrum_tolerance(p, r, m, 2 * M, ratio);
-  Eigen::EigenSolver<Eigen::MatrixXd> es(ref.A);
-  const Eigen::MatrixXcd V = es.eigenvectors(), W = V.inverse();
-  double kappa = 1;
-  for (int i = 0; i < n; ++i) kappa = std::max(kappa, V.col(i).norm() * W.row(i).norm());
-  const double pole_tol = tolerance > 0 ? tolerance : kappa * spectrum_tol;
-
-  const bool orders_agree = c.candidate_order == c.reference_order;
-  const bool agree = orders_agree && c.pole_distance <= pole_tol && c.spectrum_error <= spectrum_tol &&
-                     c.markov_error <= pole_tol;
-  json j = {{"agree", agree},
-            {"candidate", model_path},
-            {"data", data_path},
-            {"order", {{"candidate", c.candidate_order}, {"reference", c.reference_order}}},
-            {"p", p},
-            {"r", r},
-            {"method", vo ? "vo1997" : "akcay2011"},
-            {"extension", to_string(ext)},
-            {"pole_distance", c.pole_distance},
-            {"spectrum_error", c.spectrum_error},
-            {"spectrum_error_omega", c.spectrum_error_omega},
-            {"markov_error", c.markov_error},
-            {"markov_error_k", c.markov_error_k},
-            {"tolerance",
-             {{"spectrum", spectrum_tol},
-              {"poles_and_markov", pole_tol},
-              {"rule", tolerance > 0 ? "given by --tolerance"
-                                     : "4 (p + r) m log2(N) u sigma1/sigma2n (spectrum), times the eigenvalue "
-                                       "condition number of A for poles and Markov parameters"}}},
-            {"reference_model", rj}};
+  const json& sv = k.reference_model["singular_values"];
+  set_oracle_tolerances(k, ref.A, m, 2 * M, to_double(sv[0]) / to_double(sv[2 * n - 1]), tolerance);
+  const ModelComparison& c = k.comparison;
   if (json_path != "-") {
     char line[256];
     std::snprintf(line, sizeof line,
                   "%s: poles %.3e (tol %.1e), spectrum %.3e at omega = %.4f (tol %.1e), Markov R(%d) %.3e (tol %.1e)\n",
-                  agree ? "AGREES" : "DISAGREES", c.pole_distance, pole_tol, c.spectrum_error, c.spectrum_error_omega,
-                  spectrum_tol, c.markov_error_k, c.markov_error, pole_tol);
-    std::cout << (orders_agree ? "" : "orders differ: candidate " + std::to_string(c.candidate_order) +
-                                          ", reference " + std::to_string(c.reference_order) + "\n")
+                  k.agree() ? "AGREES" : "DISAGREES", c.pole_distance, k.pole_tolerance, c.spectrum_error,
+                  c.spectrum_error_omega, k.spectrum_tolerance, c.markov_error_k, c.markov_error, k.pole_tolerance);
+    std::cout << (k.orders_agree() ? "" : "orders differ: candidate " + std::to_string(c.candidate_order) +
+                                              ", reference " + std::to_string(c.reference_order) + "\n")
               << line;
   }
-  if (!json_path.empty()) write_text_file(json_path, j.dump(2) + "\n");
-  return agree ? 0 : 1;
+  if (!json_path.empty()) write_text_file(json_path, to_json(k).dump(2) + "\n");
+  return k.agree() ? 0 : 1;
 }
 
 int sample_spectrum_high(const std::string& model_path, int M, const std::string& out_path) {

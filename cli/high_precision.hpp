@@ -1,6 +1,6 @@
 #pragma once
 // Subcommands served by the high-precision reference (reference/): kept apart
-// from fdsid.cpp so that only this file sees the multiprecision types.
+// from the subcommand files so that only this file sees the multiprecision types.
 #include <string>
 
 #include "fdsid/spectrum_id.hpp"

@@ -259,6 +259,12 @@ TEST_F(Cli, UnknownExtension) {
   EXPECT_TRUE(IsBadInput(identify(good_spectrum(), {"--extension", "foo"}), {"--extension", "\"foo\""}));
 }
 
+// The enum options take their names only (not the numbers CLI11 maps them to).
+TEST_F(Cli, EnumOptionsTakeOnlyTheirNames) {
+  EXPECT_TRUE(IsBadInput(identify(good_spectrum(), {"--method", "1"}), {"--method", "\"1\"", "vo1997"}));
+  EXPECT_TRUE(IsBadInput(identify(good_spectrum(), {"--precision", "0"}), {"--precision", "\"0\""}));
+}
+
 // ---------------------------------------------------------------------------
 // Step 6: Van Overschee et al. (1997) on noisy data (Akcay 2011, Section 4)
 
@@ -494,6 +500,13 @@ TEST_F(Cli, UnknownOption) {
 }
 
 TEST_F(Cli, NonIntegerP) { EXPECT_TRUE(IsBadInput(identify(good_spectrum(), {"--p", "abc"}), {"--p"})); }
+
+TEST_F(Cli, VersionExitsZero) {
+  const RunResult r = run_fdsid({"--version"});
+  EXPECT_TRUE(Succeeded(r));
+  EXPECT_EQ(r.out.rfind("fdsid ", 0), 0u) << r.out;
+  EXPECT_EQ(r.err, "");
+}
 
 TEST_F(Cli, HelpExitsZero) {
   const RunResult r = run_fdsid({"--help"});

@@ -1,0 +1,115 @@
+#include "common.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include <unistd.h>
+
+#include "fdsid/error.hpp"
+#include "fdsid/io.hpp"
+
+namespace fdsid::cli {
+
+const std::map<std::string, Precision> kPrecisions = {{"double", Precision::Double}, {"high", Precision::High}};
+
+bool unknown_subcommand(const CLI::App& app, int argc, char** argv) {
+  auto find = [](const CLI::App& parent, const std::string& word) -> const CLI::App* {
+    const auto found = parent.get_subcommands([&](const CLI::App* s) { return s->get_name() == word; });
+    return found.empty() ? nullptr : found.front();
+  };
+  auto is_word = [](const std::string& w) { return !w.empty() && w[0] != '-'; };
+  if (argc < 2 || !is_word(argv[1])) return false;
+  const CLI::App* top = find(app, argv[1]);
+  if (top == nullptr) {
+    std::cerr << "fdsid: unknown subcommand \"" << argv[1] << "\" (run fdsid --help for the list)\n";
+    return true;
+  }
+  if (top->get_name() == "reproduce" && argc > 2 && is_word(argv[2]) && find(*top, argv[2]) == nullptr) {
+    std::cerr << "fdsid: reproduce: unknown target \"" << argv[2] << "\" (expected table1, table2, fig1 or fig2)\n";
+    return true;
+  }
+  return false;
+}
+
+CLI::Validator order_value() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        if (s == "auto") {
+          s = "0";
+          return {};
+        }
+        char* end = nullptr;
+        const long v = std::strtol(s.c_str(), &end, 10);
+        if (s.empty() || *end != '\0' || v < 1 || v > 1000)
+          return "\"" + s + "\" is neither a positive integer nor auto";
+        return {};
+      },
+      "n|auto");
+}
+
+CLI::Option* add_json_option(CLI::App* sub, std::string& path, const std::string& what) {
+  return sub->add_option("--json", path, what)->check(CLI::Validator(
+      [](std::string& s) -> std::string { return s.empty() ? "empty path (use - for stdout)" : ""; }, "FILE|-"));
+}
+
+CLI::Option* add_plot_option(CLI::App* sub, std::string& path) {
+  return sub->add_option("--plot", path, "draw the figure into this file (.svg or .png)")
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {
+            try {
+              plot::check_plot_path(s);
+            } catch (const Error& e) {
+              return e.message();
+            }
+            return {};
+          },
+          "FILE.svg|FILE.png"));
+}
+
+std::string sci(double x, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*e", digits, x);
+  return buf;
+}
+
+void emit_json(const std::string& path, const nlohmann::json& j) {
+  if (!path.empty()) write_text_file(path, j.dump(2) + "\n");
+}
+
+void emit_plot(const std::string& path, const plot::Figure& fig) {
+  if (!path.empty()) plot::render(fig, path);
+}
+
+std::function<void(int, int)> progress(const std::string& what) {
+  if (!isatty(fileno(stderr))) return {};
+  return [what](int done, int total) {
+    std::fprintf(stderr, "\r%s: %d/%d", what.c_str(), done, total);
+    if (done == total) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  };
+}
+
+void refuse_overwrite(const std::string& output, std::initializer_list<std::string> inputs, const char* option) {
+  if (output.empty() || output == "-") return;
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  for (const std::string& in : inputs) {
+    if (in.empty()) continue;
+    const bool same = fs::exists(output, ec) && fs::exists(in, ec)
+                          ? fs::equivalent(output, in, ec)
+                          : fs::weakly_canonical(output, ec) == fs::weakly_canonical(in, ec);
+    if (same)
+      throw Error(ErrorKind::Input, option,
+                  "\"" + output + "\" is also an input of this command; refusing to overwrite it");
+  }
+}
+
+void print_poles(Out& out, const Eigen::VectorXcd& poles) {
+  out << "poles:";
+  for (Eigen::Index i = 0; i < poles.size(); ++i)
+    out << "  " << poles(i).real() << (poles(i).imag() < 0 ? "" : "+") << poles(i).imag() << "i";
+  out << "\n";
+}
+
+}  // namespace fdsid::cli

@@ -1,0 +1,108 @@
+#pragma once
+// Shared pieces of the fdsid subcommands: how each registers itself, the
+// options every command has (--json, --plot), enum options mapped by CLI11,
+// and the output helpers (JSON, figure, progress, summary, overwrite guard).
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <initializer_list>
+#include <iostream>
+#include <map>
+#include <string>
+
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "fdsid/plot.hpp"
+
+namespace fdsid::cli {
+
+/// What main runs once the command line is parsed: the chosen subcommand's
+/// action (validation, then work). Each subcommand's parse callback sets it.
+using Action = std::function<int()>;
+
+/// Registers `sub` to run `run(options)` with its own options object.
+template <class Options, class Run>
+void on_parsed(CLI::App* sub, std::shared_ptr<Options> options, Action& chosen, Run run) {
+  sub->callback([options, &chosen, run] { chosen = [options, run] { return run(*options); }; });
+}
+
+// ---------------------------------------------------------------------------
+// Registration of each subcommand (one file each in cli/)
+
+void register_reproduce(CLI::App& app, Action& chosen);          // reproduce.cpp
+void register_identify_spectrum(CLI::App& app, Action& chosen);  // identify_spectrum.cpp
+void register_identify_frf(CLI::App& app, Action& chosen);       // identify_frf.cpp
+void register_check(CLI::App& app, Action& chosen);              // check.cpp
+void register_sample_spectrum(CLI::App& app, Action& chosen);    // sample_spectrum.cpp
+void register_simulate_records(CLI::App& app, Action& chosen);   // simulate.cpp
+void register_gap(CLI::App& app, Action& chosen);                // gap.cpp (gap, gap-validate)
+
+/// "fdsid: unknown subcommand ..." (or reproduce target) on stderr and true
+/// when argv names one that is not registered: CLI11 alone would say "A
+/// subcommand is required".
+bool unknown_subcommand(const CLI::App& app, int argc, char** argv);
+
+// ---------------------------------------------------------------------------
+// Options
+
+enum class Precision { Double, High };
+
+/// An enum option mapped by CLI::CheckedTransformer from its names; anything
+/// else is refused as "\"VALUE\" <refusal>" (e.g. `is not double or high`).
+template <class E>
+CLI::Validator choice(const std::map<std::string, E>& names, const std::string& refusal) {
+  const CLI::CheckedTransformer map(names);
+  std::string desc;
+  for (const auto& kv : names) desc += (desc.empty() ? "{" : ",") + kv.first;
+  return CLI::Validator(
+      [map, names, refusal](std::string& value) -> std::string {
+        // Only the names: CheckedTransformer would also take the enum's numbers.
+        if (names.count(value) == 0) return "\"" + value + "\" " + refusal;
+        return map(value);
+      },
+      desc + "}");
+}
+
+extern const std::map<std::string, Precision> kPrecisions;  // double, high
+
+/// --order: a positive integer (<= 1000) or auto (stored as 0).
+CLI::Validator order_value();
+
+/// --json FILE (- = stdout); an empty path is refused.
+CLI::Option* add_json_option(CLI::App* sub, std::string& path, const std::string& what);
+/// --plot FILE (.svg or .png); checked when given.
+CLI::Option* add_plot_option(CLI::App* sub, std::string& path);
+
+// ---------------------------------------------------------------------------
+// Output
+
+std::string sci(double x, int digits = 3);
+
+/// Writes j.dump(2) to `path` (- = stdout) when a path was given.
+void emit_json(const std::string& path, const nlohmann::json& j);
+/// Draws the figure into `path` when a path was given.
+void emit_plot(const std::string& path, const plot::Figure& fig);
+/// Progress of a long run on stderr, only when stderr is a terminal (quiet in
+/// pipes, logs and tests).
+std::function<void(int, int)> progress(const std::string& what);
+
+/// "Nothing lost": an output may not be one of the command's inputs (it would
+/// be replaced by the result, or half-written on a failure). Compared as files
+/// when both exist, else by their normalised paths.
+void refuse_overwrite(const std::string& output, std::initializer_list<std::string> inputs, const char* option);
+
+/// Prints the human summary unless the JSON goes to stdout.
+struct Out {
+  bool quiet;
+  template <class T>
+  Out& operator<<(const T& v) {
+    if (!quiet) std::cout << v;
+    return *this;
+  }
+};
+
+/// "poles:  re+imi  ..." and a newline.
+void print_poles(Out& out, const Eigen::VectorXcd& poles);
+
+}  // namespace fdsid::cli

@@ -1,0 +1,174 @@
+// fdsid identify-frf: frequency-domain subspace identification from FRF
+// samples or periodic input/output records (Pintelon 2002).
+#include <memory>
+
+#include "common.hpp"
+#include "fdsid/error.hpp"
+#include "fdsid/figures.hpp"
+#include "fdsid/io.hpp"
+#include "fdsid/json.hpp"
+#include "fdsid/workflow.hpp"
+#include "high_precision.hpp"
+
+namespace fdsid::cli {
+
+namespace {
+
+struct IdentifyFrfCommand {
+  std::string frf_path, data_path, meta_path, json_path, plot_path;
+  FrfOptions options;  // order 0 = auto, r 0 = minimise V_SUB
+  Domain domain = Domain::Discrete;
+  ContinuousMethod method = ContinuousMethod::Bilinear;
+  Precision precision = Precision::Double;
+  EivVariance eiv_variance = EivVariance::Data;
+  double min_input_snr = 10;
+  bool eiv = false, improper = false;
+};
+
+// --precision high: the reference identifies for a given order and r; the
+// automatic choices (Section 5) are made once, in double precision, and reported.
+int run_high(const IdentifyFrfCommand& c, const FrfData& data, const std::string& where) {
+  if (!c.plot_path.empty())
+    throw Error(ErrorKind::Input, "--plot", "is drawn from the double-precision result; not with --precision high");
+  if (c.eiv || c.improper) throw Error(ErrorKind::Input, "--precision", "high is not available with --eiv or --improper");
+  FrfHighRequest q;
+  q.frf_path = c.frf_path;
+  q.data_path = c.data_path;
+  q.meta_path = c.meta_path;
+  q.continuous = c.domain == Domain::Continuous;
+  q.orthogonal = c.method == ContinuousMethod::Orthogonal;
+  q.omega_scale = c.options.omega_scale;
+  std::string note;
+  OrderAndR sel{c.options.order, c.options.r};
+  if (sel.order == 0 || sel.r == 0) {
+    try {
+      sel = select_order_and_r(data, c.options);
+    } catch (const Error& e) {
+      throw e.within(where);
+    }
+    note = "order " + std::to_string(sel.order) + " and r " + std::to_string(sel.r) +
+           " chosen by the double-precision selection (singular values / V_SUB, Pintelon 2002 Section 5)";
+  }
+  q.order = sel.order;
+  q.r = sel.r;
+  return identify_frf_high(c.json_path, q, note);
+}
+
+int run(const IdentifyFrfCommand& c) {
+  const bool from_frf = !c.frf_path.empty();
+  if (!from_frf && c.data_path.empty())
+    throw Error(ErrorKind::Input, "identify-frf", "give either --frf FILE or --data FILE --meta FILE");
+  if (c.options.r < 0 || c.options.r_max < 0) throw Error(ErrorKind::Input, "--r", "must be positive");
+  refuse_overwrite(c.plot_path, {c.frf_path, c.data_path, c.meta_path, c.json_path}, "--plot");
+  refuse_overwrite(c.json_path, {c.frf_path, c.data_path, c.meta_path}, "--json");
+  Out out{c.json_path == "-"};
+  FrfOptions o = c.options;
+  o.continuous = c.method;
+  const std::string where = from_frf ? c.frf_path : c.data_path;
+
+  FrfSource source;
+  SampleStatistics stats;
+  FrfData data;
+  if (from_frf) {
+    data = read_frf_csv(c.frf_path, c.domain);
+    source.frf_path = c.frf_path;
+    source.known_variance = data.has_noise_model;
+  } else {
+    int inputs = 0;
+    const Eigen::MatrixXd samples = read_records_csv(c.data_path, inputs);
+    const RecordMeta meta = read_meta(c.meta_path);
+    require_sample_subspace_periods(meta, c.meta_path);
+    try {
+      stats = record_statistics(samples, inputs, meta, c.domain);
+    } catch (const Error& e) {
+      throw e.within(c.data_path + " with " + c.meta_path);
+    }
+    data = stats.data;
+    source.data_path = c.data_path;
+    source.meta_path = c.meta_path;
+    source.periods = meta.periods;
+    source.treatment = c.eiv        ? RecordTreatment::ErrorsInVariables
+                       : c.improper ? RecordTreatment::Improper
+                                    : RecordTreatment::Plain;
+    source.eiv_variance = c.eiv_variance;
+    source.min_input_snr = c.min_input_snr;
+  }
+  if (c.precision == Precision::High) return run_high(c, data, where);
+
+  const std::string method = frf_method_name(c.domain, c.method);
+  FrfResult res;
+  try {
+    if (from_frf) {
+      res = identify_frf(data, o);
+    } else {
+      FrfRun run = identify_frf_records(stats, o, source.treatment, c.eiv_variance, c.min_input_snr);
+      data = std::move(run.data);
+      res = std::move(run.result);
+      source.dropped_lines = run.dropped_lines;
+    }
+  } catch (const Error& e) {
+    throw e.within(where);
+  }
+  out << "identified order " << res.order << (o.order == 0 ? " (read from the singular values)" : "") << " by "
+      << method << " from F = " << data.frequencies() << " frequencies"
+      << (source.periods > 0 ? ", M = " + std::to_string(source.periods) + " periods" : std::string())
+      << ", r = " << res.r << (o.r == 0 ? " (minimising V_SUB)" : "") << "\n";
+  print_poles(out, res.poles);
+  out << "V_SUB = " << sci(res.v_sub)
+      << " (Eq. 35; about F when model and noise model are right, F (M-1)/(M-2) with sample variances)\n";
+  if (c.improper) out << "the model is the inverse system 1/G (improper G, Pintelon 2002 Section 5)\n";
+  for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
+  emit_json(c.json_path, to_json(res, method, source));
+  emit_plot(c.plot_path, plot::frf_figure(data, res));
+  return 0;
+}
+
+}  // namespace
+
+void register_identify_frf(CLI::App& app, Action& chosen) {
+  auto c = std::make_shared<IdentifyFrfCommand>();
+  FrfOptions& o = c->options;
+  auto* idf =
+      app.add_subcommand("identify-frf", "subspace identification from FRF samples or periodic records (Pintelon 2002)");
+  auto* frf = idf->add_option("--frf", c->frf_path, "FRF CSV: omega,G_re,G_im[,G_var]");
+  auto* data = idf->add_option("--data", c->data_path, "periodic input/output records CSV: u,y (or u1,...,y1,...)");
+  auto* meta =
+      idf->add_option("--meta", c->meta_path, "meta JSON of the records: period, periods, sample_time, excited_lines");
+  frf->excludes(data)->excludes(meta);
+  data->needs(meta);
+  meta->needs(data);
+  add_json_option(idf, c->json_path, "write the identified model here (- = stdout)");
+  add_plot_option(idf, c->plot_path);
+  idf->add_option("--order", o.order, "model order n_a, or auto (from the singular values of step 1c)")
+      ->transform(order_value());
+  idf->add_option("--r", o.r, "r > n_a (default: minimise V_SUB, Eq. 35, over [1.5 n_a, 6 n_a])");
+  idf->add_option("--r-max", o.r_max, "upper end of the r search (default 6 n_a)");
+  idf->add_option("--domain", c->domain, "discrete (omega in rad/sample, default) or continuous (rad/s)")
+      ->transform(choice(std::map<std::string, Domain>{{"discrete", Domain::Discrete},
+                                                       {"continuous", Domain::Continuous}},
+                         "is neither discrete nor continuous"));
+  idf->add_option("--method", c->method, "continuous time: bilinear (Algorithm 2.1, default) or orthogonal (2.2)")
+      ->transform(choice(std::map<std::string, ContinuousMethod>{{"bilinear", ContinuousMethod::Bilinear},
+                                                                 {"orthogonal", ContinuousMethod::Orthogonal}},
+                         "is not bilinear or orthogonal"));
+  idf->add_option("--omega-scale", o.omega_scale, "frequency scaling of Algorithm 2 (default sqrt(w_min w_max))");
+  idf->add_option("--precision", c->precision, "double (default) or high")
+      ->transform(choice(kPrecisions, "is not double or high"));
+  auto* eiv = idf->add_flag("--eiv", c->eiv,
+                            "noisy input: identify from G = Y/U with the variance of Eq. (31) (Section 5; needs "
+                            "--data, --meta: the input noise is estimated over the periods)");
+  idf->add_option("--eiv-variance", c->eiv_variance,
+                  "data (Eq. 31 from the noisy ratio) or model (re-evaluated at a first-pass model: consistent)")
+      ->transform(choice(std::map<std::string, EivVariance>{{"data", EivVariance::Data}, {"model", EivVariance::Model}},
+                         "is not data or model"));
+  auto* improper =
+      idf->add_flag("--improper", c->improper,
+                    "improper G: identify 1/G by swapping input and output (Section 5; needs --data, --meta)");
+  // Both need periodic records: the input noise is estimated over the periods.
+  eiv->needs(data)->excludes(improper);
+  improper->needs(data);
+  idf->add_option("--min-input-snr", c->min_input_snr, "drop lines whose input SNR is below this (default 10)");
+  on_parsed(idf, c, chosen, run);
+}
+
+}  // namespace fdsid::cli

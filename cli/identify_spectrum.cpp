@@ -1,0 +1,81 @@
+// fdsid identify-spectrum: minimum-phase spectral factor from power-spectrum
+// samples (Akcay 2011 Algorithm 1, or Van Overschee 1997).
+#include <memory>
+
+#include "common.hpp"
+#include "fdsid/error.hpp"
+#include "fdsid/figures.hpp"
+#include "fdsid/io.hpp"
+#include "fdsid/json.hpp"
+#include "fdsid/spectrum_id.hpp"
+#include "high_precision.hpp"
+
+namespace fdsid::cli {
+
+namespace {
+
+struct IdentifySpectrumCommand {
+  std::string data_path, json_path, plot_path;
+  SpectrumOptions options;  // order 0 = auto, p and r 0 = default_pr
+  Precision precision = Precision::Double;
+};
+
+int run(const IdentifySpectrumCommand& c) {
+  if (c.options.p < 0 || c.options.r < 0) throw Error(ErrorKind::Input, c.options.p < 0 ? "--p" : "--r", "must be positive");
+  if (c.precision == Precision::High && !c.plot_path.empty())
+    throw Error(ErrorKind::Input, "--plot", "is drawn from the double-precision result; not with --precision high");
+  refuse_overwrite(c.plot_path, {c.data_path, c.json_path}, "--plot");
+  refuse_overwrite(c.json_path, {c.data_path}, "--json");
+  const SpectrumOptions& so = c.options;
+  if (c.precision == Precision::High)
+    return identify_spectrum_high(c.json_path, c.data_path, so.order, so.p, so.r,
+                                  so.method == Method::VanOverschee1997, so.extension);
+  Out out{c.json_path == "-"};
+  const SpectrumData data = read_spectrum_csv(c.data_path);
+  SpectrumResult res;
+  try {
+    res = identify_spectrum(data, so);
+  } catch (const Error& e) {
+    throw e.within(c.data_path);
+  }
+  out << "identified order " << res.order << " (" << (res.order_from_data ? "read at" : "given; gap at")
+      << " sigma_" << res.gap_index << "/sigma_" << res.gap_index + 1 << " = " << sci(res.gap_ratio) << ") by "
+      << to_string(res.method) << " from M = " << data.M << ", m = " << data.m << ", p = " << res.p
+      << ", r = " << res.r << "\n";
+  print_poles(out, poles(res.model));
+  out << "Riccati: " << res.riccati_method << ", " << res.riccati_iterations << " iterations, residual "
+      << sci(res.riccati_residual, 1) << "\n";
+  for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
+  emit_json(c.json_path, to_json(res, c.data_path));
+  emit_plot(c.plot_path, plot::spectrum_figure(data, res));
+  return 0;
+}
+
+}  // namespace
+
+void register_identify_spectrum(CLI::App& app, Action& chosen) {
+  auto c = std::make_shared<IdentifySpectrumCommand>();
+  SpectrumOptions& o = c->options;
+  o.method = Method::Akcay2011;
+  o.extension = Extension::HermitianPart;
+  auto* ids = app.add_subcommand("identify-spectrum", "spectral factor from power-spectrum samples");
+  ids->add_option("--data", c->data_path, "power-spectrum CSV")->required();
+  add_json_option(ids, c->json_path, "write the identified model here (- = stdout)");
+  add_plot_option(ids, c->plot_path);
+  ids->add_option("--order", o.order, "model order n, or auto")->transform(order_value());
+  ids->add_option("--p", o.p, "block rows of Y (default: min(50, M), at least 2n+1)");
+  ids->add_option("--r", o.r, "block columns of Y (default: min(50, N - p), at least 2n)");
+  ids->add_option("--method", o.method, "akcay2011 (default) or vo1997")
+      ->transform(choice(std::map<std::string, Method>{{"akcay2011", Method::Akcay2011},
+                                                       {"vo1997", Method::VanOverschee1997}},
+                         "is not akcay2011 or vo1997"));
+  ids->add_option("--precision", c->precision, "double (default) or high")
+      ->transform(choice(kPrecisions, "is not double or high"));
+  ids->add_option("--extension", o.extension, "step 1 reading: hermitian-part (default) or conjugate")
+      ->transform(choice(std::map<std::string, Extension>{{"hermitian-part", Extension::HermitianPart},
+                                                          {"conjugate", Extension::Conjugate}},
+                         "is not hermitian-part or conjugate"));
+  on_parsed(ids, c, chosen, run);
+}
+
+}  // namespace fdsid::cli

@@ -1,0 +1,148 @@
+#pragma once
+/// Whole procedures of the command-line tool as library calls: the rules and
+/// passes that `fdsid identify-frf`, `sample-spectrum`, `check` and
+/// `reproduce fig1/fig2` apply around the algorithms, so that a program
+/// embedding fast/ gets the same results as the tool (which only parses
+/// options and formats output).
+#include <string>
+
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "fdsid/compare.hpp"
+#include "fdsid/frf_id.hpp"
+#include "fdsid/model.hpp"
+#include "fdsid/spectrum_id.hpp"
+
+namespace fdsid {
+
+// ---------------------------------------------------------------------------
+// Identification from FRF samples or periodic records (Pintelon 2002)
+
+/// Purpose: refuse a periodic record with too few periods before any work.
+/// Method: Pintelon (2002) Theorem 2: the sample-subspace estimates of B and D
+/// need M >= 4 periods, those of A and C M >= 2.
+/// Fails: Error(Input) at `meta_path` field "periods" naming M.
+void require_sample_subspace_periods(const RecordMeta& meta, const std::string& meta_path);
+
+/// How periodic records are turned into frequency-domain data (Section 5).
+enum class RecordTreatment {
+  Plain,               ///< Û, Ŷ and σ̂²_Y / M (sample-subspace algorithm, Section 4.1)
+  ErrorsInVariables,   ///< noisy input: Ĝ = Ŷ/Û with the variance of Eq. (31)
+  Improper             ///< improper G: identify 1/G by swapping input and output
+};
+
+/// Where the variance of the errors-in-variables data is evaluated.
+enum class EivVariance {
+  Data,   ///< Eq. (31) from the noisy ratio Ĝ (one pass)
+  Model   ///< Eq. (31) at a first-pass model (second pass: consistent weight)
+};
+
+/// Where identify-frf's data came from and how they were treated: the
+/// "source" object of its JSON (fdsid/json.hpp).
+struct FrfSource {
+  std::string frf_path;              ///< FRF CSV, or empty
+  bool known_variance = false;       ///< the FRF CSV had a G_var column
+  std::string data_path, meta_path;  ///< periodic records + meta, or empty
+  int periods = 0;                   ///< M of the records
+  RecordTreatment treatment = RecordTreatment::Plain;
+  EivVariance eiv_variance = EivVariance::Data;
+  double min_input_snr = 10;         ///< the line rule of Eq. (34) (ErrorsInVariables, Improper)
+  int dropped_lines = 0;             ///< lines dropped by that rule
+};
+
+/// An identification together with the data it was made from (what the
+/// figure of identify-frf draws).
+struct FrfRun {
+  FrfData data;
+  FrfResult result;
+  int dropped_lines = 0;
+};
+
+/// Purpose: identify from the sample statistics of periodic records as
+/// `fdsid identify-frf --data --meta [--eiv [--eiv-variance model] | --improper]`.
+/// Method: Plain: identify_frf on stats.data. ErrorsInVariables:
+/// errors_in_variables (corrected Eq. 31, lines below `min_input_snr` dropped),
+/// identify_frf; with EivVariance::Model a second pass re-evaluates the
+/// variance at the first-pass model and identifies again with the first
+/// pass's order and r. Improper: swap_input_output, identify_frf (the model is
+/// 1/G). A discrete-time model carries the records' sample time.
+/// Fails: as errors_in_variables / swap_input_output and identify_frf.
+/// References: Pintelon (2002) Sections 4.1 and 5, Eqs. (31), (34).
+FrfRun identify_frf_records(const SampleStatistics& stats, const FrfOptions& options, RecordTreatment treatment,
+                            EivVariance eiv_variance = EivVariance::Data, double min_input_snr = 10.0);
+
+/// Order and r of an identification.
+struct OrderAndR {
+  int order = 0, r = 0;
+};
+
+/// Purpose: the order and r to hand to an identification that needs both
+/// given (the 50-digit reference): options.order / options.r where set, else
+/// the automatic choices.
+/// Method: identify_frf in double precision with `options` (order from the
+/// singular values of step 1c, r minimising V_SUB of Eq. 35) and its order, r.
+/// Fails: as identify_frf.
+/// References: Pintelon (2002) Section 5.
+OrderAndR select_order_and_r(const FrfData& data, const FrfOptions& options);
+
+/// The "method" name of an FRF identification: "pintelon2002-alg1" (discrete
+/// time, Algorithm 1) or "pintelon2002-alg2-bilinear" / "-orthogonal"
+/// (continuous time, Algorithm 2.1 / 2.2).
+std::string frf_method_name(Domain domain, ContinuousMethod method);
+
+// ---------------------------------------------------------------------------
+// Power spectra of models
+
+/// Purpose: refuse a model whose power spectrum is not defined before
+/// sampling it (`fdsid sample-spectrum`).
+/// Method: every pole of A strictly inside the unit circle (spectral radius
+/// < 1) and as many inputs as outputs.
+/// Fails: Error(Input) at `where` naming the pole modulus, or the shape.
+void require_spectrum_model(const StateSpace& model, const std::string& where);
+
+// ---------------------------------------------------------------------------
+// Monte Carlo reproductions
+
+/// Purpose: the Monte Carlo standard error of one ratio of standard deviations
+/// of Pintelon (2002) Figs. 1b/2b.
+/// Method: each sample standard deviation over N_r runs has relative standard
+/// deviation ≈ 1/√(2 N_r) (Gaussian estimates); their ratio at most √2 times
+/// that: √2 / √(2 N_r).
+/// Fails: never (runs <= 0 gives +inf).
+double std_ratio_standard_error(int runs);
+
+// ---------------------------------------------------------------------------
+// Oracle check (`fdsid check`)
+
+/// Purpose: the eigenvalue condition number of A, max_i ||v_i|| ||w_i|| over
+/// right eigenvectors v_i and the rows w_i of V⁻¹ (1 for a normal matrix).
+/// Method: Eigen::EigenSolver; at least 1.
+/// Fails: never (an empty A gives 1).
+double eigenvalue_condition_number(const Eigen::MatrixXd& A);
+
+/// The result of comparing a candidate model with the reference's.
+struct OracleCheck {
+  std::string candidate_path, data_path;
+  int p = 0, r = 0;
+  Method method = Method::Akcay2011;
+  Extension extension = Extension::HermitianPart;
+  ModelComparison comparison;
+  double spectrum_tolerance = 0, pole_tolerance = 0;
+  bool tolerance_given = false;  ///< by the user, instead of the derived rule
+  nlohmann::json reference_model;
+  bool orders_agree() const { return comparison.candidate_order == comparison.reference_order; }
+  /// Same order, and poles, spectrum and Markov parameters within tolerance.
+  bool agree() const;
+};
+
+/// Purpose: the tolerances of `fdsid check` and the verdict.
+/// Method: tolerance > 0 is used for everything; else the spectrum tolerance
+/// is double_precision_spectrum_tolerance(p, r, m, N, σ1/σ_2n) and the poles'
+/// and Markov parameters' that times the eigenvalue condition number of the
+/// reference's A.
+/// Fails: never.
+void set_oracle_tolerances(OracleCheck& check, const Eigen::MatrixXd& reference_A, int m, int N,
+                           double sigma1_over_sigma2n, double tolerance);
+
+}  // namespace fdsid

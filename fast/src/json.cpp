@@ -1,0 +1,141 @@
+#include "fdsid/json.hpp"
+
+#include <cmath>
+
+namespace fdsid {
+
+using nlohmann::json;
+
+namespace {
+
+std::vector<double> vec(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
+
+}  // namespace
+
+json to_json(const StateSpace& model) { return model_to_json(model); }
+
+json to_json(const SpectrumResult& result, const std::string& data_path) {
+  json j = result_to_json(result);
+  j["data"] = data_path;
+  return j;
+}
+
+json to_json(const FrfSource& s) {
+  json j;
+  if (!s.frf_path.empty()) {
+    j = {{"frf", s.frf_path}, {"variance", s.known_variance ? "G_var column (known)" : "none (unit weights)"}};
+    return j;
+  }
+  j = {{"data", s.data_path},
+       {"meta", s.meta_path},
+       {"periods", s.periods},
+       {"variance", "sample variance over the periods / M (Pintelon 2002 Eq. 25)"}};
+  if (s.treatment == RecordTreatment::ErrorsInVariables)
+    j["errors_in_variables"] = {{"variance", s.eiv_variance == EivVariance::Model ? "Eq. (31) at the first-pass model"
+                                                                                  : "Eq. (31), corrected (conj U)"},
+                                {"dropped_lines", s.dropped_lines},
+                                {"min_input_snr", s.min_input_snr}};
+  else if (s.treatment == RecordTreatment::Improper)
+    j["improper"] = {{"represents", "inverse: the model maps output to input (1/G)"},
+                     {"dropped_lines", s.dropped_lines}};
+  return j;
+}
+
+json to_json(const FrfResult& result, const std::string& method, const FrfSource& source) {
+  json j = frf_result_to_json(result, method);
+  j["source"] = to_json(source);
+  if (source.frf_path.empty() && source.treatment == RecordTreatment::Improper) j["represents"] = "inverse";
+  return j;
+}
+
+json to_json(const RecordMeta& meta) { return meta_to_json(meta); }
+
+json to_json(const std::vector<Table1Row>& rows) {
+  json j;
+  j["source"] = "Akcay (2011) Table 1: 4th and 5th singular values of G_9 F_8 (Eq. 13), noise-free, p = 9, r = 8";
+  j["rows"] = json::array();
+  for (const auto& r : rows)
+    j["rows"].push_back({{"M", r.M},
+                         {"sigma4", r.vo_sigmas(3)},
+                         {"sigma5", r.vo_sigmas(4)},
+                         {"vo_sigmas", vec(r.vo_sigmas)},
+                         {"akcay_sigmas", vec(r.akcay_sigmas)}});
+  return j;
+}
+
+json to_json(const std::vector<Table2Row>& rows, const Table2Options& o) {
+  json j;
+  j["source"] = "Akcay (2011) Table 2: mean measured L2 / Linf errors of Algorithm 1, p = r = 50, eps = 1e-3";
+  j["realizations"] = o.realizations;
+  j["seed"] = o.seed;
+  j["noise"] = {
+      {"model", "s_k = eps H(z_k) v_k on the M+1 given samples k = 1..M+1 (Eq. 7), extended with the data by step 1"},
+      {"epsilon", o.epsilon},
+      {"variance", to_string(o.noise)},
+      {"extension", to_string(o.extension)}};
+  j["rows"] = json::array();
+  for (const auto& r : rows)
+    j["rows"].push_back({{"M", r.M},
+                         {"l2", r.l2},
+                         {"linf", r.linf},
+                         {"l2_sd", r.l2_sd},
+                         {"linf_sd", r.linf_sd},
+                         {"failures", r.failures},
+                         {"vo1997_runs", r.vo_runs},
+                         {"vo1997_failures", r.vo_failures},
+                         {"vo1997_step6_failures", r.vo_split_failures},
+                         {"vo1997_l2_when_returned", std::isnan(r.vo_l2) ? json(nullptr) : json(r.vo_l2)}});
+  return j;
+}
+
+json to_json(const FigureResult& res, int figure, const FigureOptions& o) {
+  return {{"figure", figure},
+          {"source", std::string("Pintelon (2002) Section 6.1, Fig. ") + (figure == 1 ? "1b" : "2b")},
+          {"frequency", vec(res.frequency)},
+          {"frequency_unit", "f/fs"},
+          {"ratio", vec(res.ratio)},
+          {"theory", vec(res.theory)},
+          {"bound", res.bound},
+          {"median_ratio", res.median_ratio},
+          {"runs", res.runs},
+          {"failures", res.failures},
+          {"M", o.M},
+          {"F", o.F},
+          {"r", o.r},
+          {"order", o.order},
+          {"input_level", o.input_level},
+          {"seed", o.seed},
+          {"std_subspace", vec(res.std_subspace)},
+          {"std_sample_subspace", vec(res.std_sample)},
+          {"std_known_alpha", vec(res.std_known_alpha)}};
+}
+
+json to_json(const GapReport& report) { return gap_report_to_json(report); }
+
+json to_json(const GapValidation& validation) { return gap_validation_to_json(validation); }
+
+json to_json(const OracleCheck& k) {
+  const ModelComparison& c = k.comparison;
+  return {{"agree", k.agree()},
+          {"candidate", k.candidate_path},
+          {"data", k.data_path},
+          {"order", {{"candidate", c.candidate_order}, {"reference", c.reference_order}}},
+          {"p", k.p},
+          {"r", k.r},
+          {"method", to_string(k.method)},
+          {"extension", to_string(k.extension)},
+          {"pole_distance", c.pole_distance},
+          {"spectrum_error", c.spectrum_error},
+          {"spectrum_error_omega", c.spectrum_error_omega},
+          {"markov_error", c.markov_error},
+          {"markov_error_k", c.markov_error_k},
+          {"tolerance",
+           {{"spectrum", k.spectrum_tolerance},
+            {"poles_and_markov", k.pole_tolerance},
+            {"rule", k.tolerance_given ? "given by --tolerance"
+                                       : "4 (p + r) m log2(N) u sigma1/sigma2n (spectrum), times the eigenvalue "
+                                         "condition number of A for poles and Markov parameters"}}},
+          {"reference_model", k.reference_model}};
+}
+
+}  // namespace fdsid
