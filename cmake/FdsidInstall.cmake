@@ -12,19 +12,20 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-set_target_properties(fdsid_fast PROPERTIES EXPORT_NAME fast)
-install(TARGETS fdsid_fast EXPORT fdsidTargets
-  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
-  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
-install(DIRECTORY ${PROJECT_SOURCE_DIR}/fast/include/fdsid
-  DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} FILES_MATCHING PATTERN "*.hpp")
-if(TARGET fdsid_reference)
-  set_target_properties(fdsid_reference PROPERTIES EXPORT_NAME reference)
-  install(TARGETS fdsid_reference EXPORT fdsidTargets
+# A library of the package: its archive, its public headers (the folder
+# INCLUDE_ROOT/fdsid), and its name fdsid::EXPORT_NAME.
+function(fdsid_install_library target export_name include_root)
+  set_target_properties(${target} PROPERTIES EXPORT_NAME ${export_name})
+  install(TARGETS ${target} EXPORT fdsidTargets
     ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
     LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
-  install(DIRECTORY ${PROJECT_SOURCE_DIR}/reference/include/fdsid
+  install(DIRECTORY ${include_root}/fdsid
     DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} FILES_MATCHING PATTERN "*.hpp")
+endfunction()
+
+fdsid_install_library(fdsid_fast fast ${PROJECT_SOURCE_DIR}/fast/include)
+if(TARGET fdsid_reference)
+  fdsid_install_library(fdsid_reference reference ${PROJECT_SOURCE_DIR}/reference/include)
 endif()
 if(TARGET fdsid)
   install(TARGETS fdsid RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
