@@ -67,12 +67,6 @@ CLI::Option* add_plot_option(CLI::App* sub, std::string& path) {
           "FILE.svg|FILE.png"));
 }
 
-std::string sci(double x, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*e", digits, x);
-  return buf;
-}
-
 void emit_json(const std::string& path, const nlohmann::json& j) {
   if (!path.empty()) write_text_file(path, j.dump(2) + "\n");
 }

@@ -13,6 +13,7 @@
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
+#include "fdsid/format.hpp"
 #include "fdsid/plot.hpp"
 
 namespace fdsid::cli {
@@ -77,7 +78,7 @@ CLI::Option* add_plot_option(CLI::App* sub, std::string& path);
 // ---------------------------------------------------------------------------
 // Output
 
-std::string sci(double x, int digits = 3);
+using fdsid::sci;  // fdsid/format.hpp: the one home of the number formats
 
 /// Writes j.dump(2) to `path` (- = stdout) when a path was given.
 void emit_json(const std::string& path, const nlohmann::json& j);

@@ -7,7 +7,7 @@
 #include "fdsid/model.hpp"
 #include "numerics/constants.hpp"
 #include "numerics/fft.hpp"
-#include "numerics/format.hpp"
+#include "fdsid/format.hpp"
 #include "numerics/lyapunov.hpp"
 #include "numerics/optimize.hpp"
 #include "numerics/qr.hpp"

@@ -10,7 +10,7 @@
 #include "fdsid/error.hpp"
 #include "numerics/constants.hpp"
 #include "numerics/fft.hpp"
-#include "numerics/format.hpp"
+#include "fdsid/format.hpp"
 #include "numerics/qr.hpp"
 #include "numerics/rank.hpp"
 
@@ -22,7 +22,6 @@ using numerics::kUnitRoundoff;
 // Largest number of rows r (m + p) of Z that step 1 attempts.
 constexpr int kMaxColumns = 4000;
 
-using numerics::fmt;
 
 [[noreturn]] void fail(ErrorKind kind, const std::string& where, const std::string& what) {
   throw Error(kind, where, what);

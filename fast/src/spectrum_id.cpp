@@ -12,7 +12,7 @@
 #include "fdsid/error.hpp"
 #include "numerics/constants.hpp"
 #include "numerics/fft.hpp"
-#include "numerics/format.hpp"
+#include "fdsid/format.hpp"
 #include "numerics/qr.hpp"
 #include "numerics/rank.hpp"
 #include "numerics/riccati.hpp"
@@ -21,7 +21,6 @@ namespace fdsid {
 
 namespace {
 
-using numerics::fmt;
 using numerics::kUnitRoundoff;
 // Largest side of 𝒴 (p m, r m) whose SVD fdsid attempts (≈ 1 min of Jacobi sweeps here).
 constexpr int kMaxSvdDimension = 2000;

@@ -1,9 +1,9 @@
-#include "numerics/format.hpp"
+#include "fdsid/format.hpp"
 
 #include <cstdio>
 #include <sstream>
 
-namespace fdsid::numerics {
+namespace fdsid {
 
 std::string fmt(double x, int digits) {
   std::ostringstream s;
@@ -18,4 +18,4 @@ std::string sci(double x, int digits) {
   return buf;
 }
 
-}  // namespace fdsid::numerics
+}  // namespace fdsid

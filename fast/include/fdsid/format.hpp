@@ -1,9 +1,10 @@
 #pragma once
-// Number formatting for diagnostics (internal header). Error and warning
-// texts are compared by tests, so each format is fixed here.
+/// Number formatting of diagnostics and summaries, one home for fast/ and the
+/// CLI (fast/src/numerics/format.cpp). Error, warning and summary texts are
+/// compared by tests, so each format is fixed here.
 #include <string>
 
-namespace fdsid::numerics {
+namespace fdsid {
 
 /// x in the ostream default (%g-like) notation with `digits` significant
 /// digits, as `std::ostringstream s; s.precision(digits); s << x;` prints it
@@ -14,4 +15,4 @@ std::string fmt(double x, int digits);
 /// printf("%.*e", digits, x) prints it (e.g. sci(1234.56, 3) == "1.235e+03").
 std::string sci(double x, int digits = 3);
 
-}  // namespace fdsid::numerics
+}  // namespace fdsid
