@@ -199,11 +199,19 @@ struct Step1 {
   double noise_scale = 0;   // ‖L⁻¹‖₁ ‖R‖_F: rounding of the QR of all of Z, whitened
 };
 
-Step1 step1(const FrfData& d, const Bases& b, int r) {
+// Step 1's size checks.
+//
+// Purpose: refuse a Z = [𝐔^re; 𝐘^re] of r (m + p) rows and 2 F c columns that
+// is too large or too short, before anything is allocated.
+// Method: work and memory first: the bases (2 r F complex), the TSQR work
+// matrix and R (cols² + 2048·cols doubles per thread), C_Y and the SVD
+// (3 ny² doubles), ny = r p.
+// Fails: Error(Resource) above kMaxColumns rows or the memory limit,
+// Error(Dimension) when Z has fewer columns than rows.
+// References: Pintelon (2002) Algorithm 1 step 1.
+void step1_check_size(const FrfData& d, int r) {
   const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
-  const int nu = r * m, ny = r * p, cols = nu + ny;
-  // Work and memory first: the bases (2 r F complex), the TSQR work matrix and
-  // R (cols² + 2048·cols doubles per thread), C_Y and the SVD (3 ny² doubles).
+  const int ny = r * p, cols = r * m + ny;
   if (cols > kMaxColumns)
     fail(ErrorKind::Resource, "step 1b",
          "r (m + p) = " + std::to_string(cols) + " rows of Z exceed the supported " + std::to_string(kMaxColumns) +
@@ -214,8 +222,23 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
     fail(ErrorKind::Dimension, "step 1b",
          "2 F c = " + std::to_string(2LL * F * c) + " real columns of Z are fewer than its r (m + p) = " +
              std::to_string(cols) + " rows: more frequencies or a smaller r (r = " + std::to_string(r) + ")");
-  // Step 1a/1b. Rows of Zᵀ for frequency k, column j: Re and Im of
-  // [W_u(k) ⊗ U_j(k); W_y(k) ⊗ Y_j(k)] (Eqs. 9, 11, 18).
+}
+
+// Steps 1a-1b: R of the QR of Zᵀ.
+//
+// Purpose: the upper-triangular R (r (m+p) square) of Zᵀ = Q R, with the
+// input block R11 (r m square) checked for persistence of excitation.
+// Method: rows of Zᵀ for frequency k, column j: Re and Im of
+// [W_u(k) ⊗ U_j(k); W_y(k) ⊗ Y_j(k)] (Eqs. 9, 11, 18), streamed into the TSQR.
+// Numerical aspects: Assumption 3 (persistence of excitation): R11 must be
+// non-singular. Its diagonal is |R11_ii|; rank deficiency shows as a diagonal
+// entry at the rounding level, 100 · u · √(rows) · max |R11_ii| (Householder
+// backward error; numerics/rank.hpp), rows = 2 F c.
+// Fails: Error(Numerical) when 𝐔^re is rank deficient.
+// References: Pintelon (2002) Eqs. (9), (11), (18), Assumption 3.
+Eigen::MatrixXd step1ab_qr(const FrfData& d, const Bases& b, int r) {
+  const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
+  const int nu = r * m, ny = r * p, cols = nu + ny;
   const RowFill fill = [&](int k, Eigen::Ref<Eigen::MatrixXd> rows) {
     for (int j = 0; j < c; ++j)
       for (int i = 0; i < r; ++i) {
@@ -232,11 +255,7 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
         }
       }
   };
-  const Eigen::MatrixXd R = tsqr(F, 2 * c, cols, fill);
-  // Assumption 3 (persistence of excitation): R11 must be non-singular. Its
-  // diagonal is |R11_ii|; rank deficiency shows as a diagonal entry at the
-  // rounding level, 100 · u · √(rows) · max |R11_ii| (Householder backward
-  // error; numerics/rank.hpp), rows = 2 F c.
+  Eigen::MatrixXd R = tsqr(F, 2 * c, cols, fill);
   const Eigen::VectorXd r11 = R.topLeftCorner(nu, nu).diagonal().cwiseAbs();
   const double r11max = r11.maxCoeff();
   if (!numerics::numerically_full_rank(r11, std::sqrt(2.0 * F * c)))
@@ -244,17 +263,25 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
          "the input data matrix U^re is rank deficient (min |R11_ii| / max = " + fmt(r11.minCoeff() / r11max, 3) +
              "): the input does not excite r = " + std::to_string(r) +
              " basis functions (Pintelon 2002 Assumption 3); use fewer r or more excited lines");
-  const double r11_cond = triangular_condition(R.topLeftCorner(nu, nu));
-  const Eigen::MatrixXd R22t = R.bottomRightCorner(ny, ny).transpose();
-  // Step 1c. C_Y = Σ Re((W_y W_yᴴ) ⊗ diag σ²): entry ((i,a),(i',a')) is
-  // δ_{aa'} Σ_{k,j} Re(W_i conj W_i') σ²_a(k, j).
+  return R;
+}
+
+// Step 1c, first half: the noise covariance C_Y of the output rows of Z.
+//
+// Purpose: C_Y (r p square) = Σ Re((W_y W_yᴴ) ⊗ diag σ²): entry
+// ((i,a),(i',a')) is δ_{aa'} Σ_{k,j} Re(W_i conj W_i') σ²_a(k, j).
+// Method: one r x r block per output a. Power bases on the unit circle
+// (ξ = z or w, |ξ| = 1): Re(ξ^i conj ξ^i') = Re ξ^{i−i'}, so the block is the
+// symmetric Toeplitz matrix t(|i − i'|) with t(δ) = Σ_k σ²_k Re ξ_k^δ —
+// O(F r), not O(F r²); orthogonal bases: the lower triangle summed directly.
+// Fails: never.
+// References: Pintelon (2002) Eq. (18).
+Eigen::MatrixXd step1c_noise_covariance(const FrfData& d, const Bases& b, int r) {
+  const int F = d.frequencies(), p = d.outputs(), ny = r * p;
   Eigen::MatrixXd CY = Eigen::MatrixXd::Zero(ny, ny);
   for (int a = 0; a < p; ++a) {
     Eigen::MatrixXd block = Eigen::MatrixXd::Zero(r, r);
     if (!b.orthogonal) {
-      // Power bases on the unit circle (ξ = z or w, |ξ| = 1):
-      // Re(ξ^i conj ξ^i') = Re ξ^{i−i'}, so the block is the symmetric Toeplitz
-      // matrix t(|i − i'|) with t(δ) = Σ_k σ²_k Re ξ_k^δ — O(F r), not O(F r²).
       Eigen::VectorXd t = Eigen::VectorXd::Zero(r);
       for (int k = 0; k < F; ++k) {
         const double s2 = d.variance[k].row(a).sum();
@@ -273,6 +300,22 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
     for (int i = 0; i < r; ++i)
       for (int i2 = 0; i2 < r; ++i2) CY(i * p + a, i2 * p + a) = block(i, i2);
   }
+  return CY;
+}
+
+// Step 1c, second half: the whitened SVD.
+//
+// Purpose: C_Y = L Lᵀ and the SVD of L⁻¹ R22ᵀ (R22 the output block of R).
+// Method: Cholesky (Eigen::LLT), a triangular solve, Jacobi SVD (full U).
+// Numerical aspects: the QR of step 1b is backward stable for all of Zᵀ: R22
+// carries an error ~u‖Z‖ = u‖R‖_F however small R22 is (a weak dynamic part
+// beside a large feedthrough D U), and whitening multiplies it by at most
+// ‖L⁻¹‖; noise_scale = ‖L⁻¹‖₁ ‖R‖_F records it.
+// Fails: Error(Numerical) when C_Y is not positive definite.
+// References: Pintelon (2002) Algorithm 1 step 1c.
+Step1 step1c_whitened_svd(const Eigen::MatrixXd& CY, const Eigen::MatrixXd& R, int r) {
+  const Eigen::Index ny = CY.rows();
+  const Eigen::MatrixXd R22t = R.bottomRightCorner(ny, ny).transpose();
   Step1 s;
   Eigen::LLT<Eigen::MatrixXd> llt(CY);
   if (llt.info() != Eigen::Success)
@@ -283,12 +326,19 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(K, Eigen::ComputeFullU);
   s.Usvd = svd.matrixU();
   s.sigma = svd.singularValues();
-  s.r11_condition = r11_cond;
-  // The QR of step 1b is backward stable for all of Zᵀ: R22 carries an error
-  // ~u‖Z‖ = u‖R‖_F however small R22 is (a weak dynamic part beside a large
-  // feedthrough D U), and whitening multiplies it by at most ‖L⁻¹‖.
   const Eigen::MatrixXd Linv = s.L.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(ny, ny));
   s.noise_scale = Linv.cwiseAbs().colwise().sum().maxCoeff() * R.norm();
+  return s;
+}
+
+// Step 1 (a-c): size checks, R of Zᵀ (1a-1b), C_Y and the whitened SVD (1c).
+Step1 step1(const FrfData& d, const Bases& b, int r) {
+  step1_check_size(d, r);
+  const Eigen::MatrixXd R = step1ab_qr(d, b, r);
+  const int nu = r * d.inputs();
+  const double r11_cond = triangular_condition(R.topLeftCorner(nu, nu));
+  Step1 s = step1c_whitened_svd(step1c_noise_covariance(d, b, r), R, r);
+  s.r11_condition = r11_cond;
   return s;
 }
 

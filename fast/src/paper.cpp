@@ -228,9 +228,17 @@ struct FigureSums {
   }
 };
 
-}  // namespace
+// The noise-free part of Section 6.1's experiment, the same in every run.
+struct FigureSetup {
+  StateSpace plant;
+  Eigen::VectorXd omega, sigma2;  // ω_k = 2π k/2000 and σ_Y(k)² = |H_0(z_k)|²
+  Eigen::VectorXcd G0, U;         // G_0(z_k) and the periodic input U(k)
+};
 
-FigureResult reproduce_pintelon_figure(const FigureOptions& o) {
+// Purpose: reject options the figure cannot use.
+// Fails: Error(Input) for runs < 2, M < 4 (Theorem 2 and the bound of
+// Eq. 30), F outside 2 ... 999, or a non-positive input level.
+void check_figure_options(const FigureOptions& o) {
   if (o.runs < 2) throw Error(ErrorKind::Input, "--runs", "must be at least 2 (a standard deviation)");
   if (o.M < 4)
     throw Error(ErrorKind::Input, "--M", "M = " + std::to_string(o.M) +
@@ -239,18 +247,90 @@ FigureResult reproduce_pintelon_figure(const FigureOptions& o) {
   if (o.F < 2 || o.F > 999) throw Error(ErrorKind::Input, "--F", "must be in 2 ... 999 (f_k/f_s = k/2000 < 1/2)");
   if (!(o.input_level > 0) || !std::isfinite(o.input_level))
     throw Error(ErrorKind::Input, "--input-level", "must be positive and finite");
-  const StateSpace plant = pintelon_plant();
+}
+
+// Purpose: the grid f_k/f_s = k/2000, the plant (Eq. 36), the noise variance
+// (Eq. 37) and the input U(k) = input_level · e^{jφ_k}, φ_k uniform from the
+// seed (a periodic input: the same in every run and experiment).
+// References: Pintelon (2002) Section 6.1, Eqs. (36), (37).
+FigureSetup figure_setup(const FigureOptions& o) {
+  FigureSetup s;
+  s.plant = pintelon_plant();
   const int F = o.F;
-  Eigen::VectorXd omega(F), sigma2(F);
-  Eigen::VectorXcd G0(F), U(F);
+  s.omega.resize(F);
+  s.sigma2.resize(F);
+  s.G0.resize(F);
+  s.U.resize(F);
   std::mt19937_64 phase_gen(splitmix64(o.seed ^ 0x9e3779b97f4a7c15ULL));
   std::uniform_real_distribution<double> phase(0.0, 2 * M_PI);
   for (int k = 0; k < F; ++k) {
-    omega(k) = 2 * M_PI * (k + 1) / 2000.0;
-    sigma2(k) = pintelon_noise_variance(omega(k));
-    G0(k) = transfer(plant, std::polar(1.0, omega(k)))(0, 0);
-    U(k) = std::polar(o.input_level, phase(phase_gen));
+    s.omega(k) = 2 * M_PI * (k + 1) / 2000.0;
+    s.sigma2(k) = pintelon_noise_variance(s.omega(k));
+    s.G0(k) = transfer(s.plant, std::polar(1.0, s.omega(k)))(0, 0);
+    s.U(k) = std::polar(o.input_level, phase(phase_gen));
   }
+  return s;
+}
+
+// One Monte Carlo run i, added to acc.
+//
+// Purpose: M experiments Y^[l] = G₀ U + N^[l], N^[l] circular complex normal
+// of variance σ² (Re, Im each N(0, σ²/2)), from run i's own generator seeded
+// by (seed, i); then (i) the sample-subspace estimate θ̂_S (Ŷ, σ̂²/M,
+// Section 4.1), (ii) the subspace estimate θ̂ (Ŷ with the true σ²/M) and
+// (iii) β̂(α₀): the true A, C (for n_a = 4) with B, D by Eq. (17). For
+// n_a ≠ 4 there is no true α of that order; the θ̂ estimate's A, C stand in
+// (the paper's Fig. 2 has no dashed curve).
+// U_l, Y_l: work space of M x F one-element vectors.
+// Fails: a run whose estimates fail (Error) or are not finite counts as a
+// failure in acc; an Error of sample_statistics propagates.
+void figure_run(const FigureOptions& o, const FigureSetup& su, int i, std::vector<std::vector<Eigen::VectorXcd>>& U_l,
+                std::vector<std::vector<Eigen::VectorXcd>>& Y_l, FigureSums& acc) {
+  const int F = o.F;
+  std::mt19937_64 gen(splitmix64(o.seed ^ splitmix64(static_cast<std::uint64_t>(i) + 0x51ed2701ULL)));
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (int l = 0; l < o.M; ++l)
+    for (int k = 0; k < F; ++k) {
+      const double sd = std::sqrt(su.sigma2(k) / 2);
+      const double re = normal(gen), im = normal(gen);
+      U_l[l][k](0) = su.U(k);
+      Y_l[l][k](0) = su.G0(k) * su.U(k) + sd * cplx(re, im);
+    }
+  const SampleStatistics st = sample_statistics(Domain::Discrete, su.omega, U_l, Y_l);
+  FrfData known = st.data;
+  for (int k = 0; k < F; ++k) known.variance[k](0, 0) = su.sigma2(k) / o.M;
+  try {
+    const StateSpace eS = identify_frf_fixed(st.data, o.order, o.r).model;
+    const StateSpace eT = identify_frf_fixed(known, o.order, o.r).model;
+    const StateSpace eK = o.order == su.plant.order() ? fit_input_matrices(known, su.plant.A, su.plant.C)
+                                                      : fit_input_matrices(known, eT.A, eT.C);
+    Eigen::VectorXcd g[3];
+    const StateSpace* est[3] = {&eS, &eT, &eK};
+    for (int e = 0; e < 3; ++e) {
+      const std::vector<Eigen::MatrixXcd> G = frequency_response(*est[e], su.omega);
+      g[e].resize(F);
+      for (int k = 0; k < F; ++k) g[e](k) = G[k](0, 0);
+    }
+    for (int e = 0; e < 3; ++e)
+      if (!g[e].allFinite()) throw Error(ErrorKind::Numerical, "run", "non-finite estimate");
+    for (int e = 0; e < 3; ++e) {
+      acc.s[e] += g[e];
+      acc.s2[e] += g[e].cwiseAbs2();
+    }
+    ++acc.runs;
+  } catch (const Error&) {
+    ++acc.failures;
+  }
+}
+
+// The Monte Carlo over o.runs runs.
+//
+// Purpose: Σ G, Σ |G|² and the run counts over all runs.
+// Method: blocks of 50 runs handed to o.threads workers (0: one per core);
+// sums are accumulated per block and merged in block order, so the result
+// does not depend on the thread count.
+FigureSums figure_monte_carlo(const FigureOptions& o, const FigureSetup& su) {
+  const int F = o.F;
   constexpr int kBlock = 50;
   const int blocks = (o.runs + kBlock - 1) / kBlock;
   std::vector<FigureSums> sums(blocks, FigureSums(F));
@@ -260,48 +340,7 @@ FigureResult reproduce_pintelon_figure(const FigureOptions& o) {
     std::vector<std::vector<Eigen::VectorXcd>> U_l(o.M, std::vector<Eigen::VectorXcd>(F, Eigen::VectorXcd(1)));
     std::vector<std::vector<Eigen::VectorXcd>> Y_l = U_l;
     for (int b = next++; b < blocks; b = next++) {
-      FigureSums& acc = sums[b];
-      for (int i = b * kBlock; i < std::min(o.runs, (b + 1) * kBlock); ++i) {
-        std::mt19937_64 gen(splitmix64(o.seed ^ splitmix64(static_cast<std::uint64_t>(i) + 0x51ed2701ULL)));
-        std::normal_distribution<double> normal(0.0, 1.0);
-        for (int l = 0; l < o.M; ++l)
-          for (int k = 0; k < F; ++k) {
-            const double sd = std::sqrt(sigma2(k) / 2);  // circular: Re, Im each N(0, σ²/2)
-            const double re = normal(gen), im = normal(gen);
-            U_l[l][k](0) = U(k);
-            Y_l[l][k](0) = G0(k) * U(k) + sd * cplx(re, im);
-          }
-        // (i) sample subspace: Ŷ, σ̂²/M (Section 4.1).
-        const SampleStatistics st = sample_statistics(Domain::Discrete, omega, U_l, Y_l);
-        // (ii) subspace: Ŷ with the true σ²/M.
-        FrfData known = st.data;
-        for (int k = 0; k < F; ++k) known.variance[k](0, 0) = sigma2(k) / o.M;
-        try {
-          const StateSpace eS = identify_frf_fixed(st.data, o.order, o.r).model;
-          const StateSpace eT = identify_frf_fixed(known, o.order, o.r).model;
-          // (iii) β̂(α₀): the true A, C (for n_a = 4) with B, D by Eq. (17). For
-          // n_a ≠ 4 there is no true α of that order; the θ̂ estimate's A, C
-          // stand in (the paper's Fig. 2 has no dashed curve).
-          const StateSpace eK = o.order == plant.order() ? fit_input_matrices(known, plant.A, plant.C)
-                                                         : fit_input_matrices(known, eT.A, eT.C);
-          Eigen::VectorXcd g[3];
-          const StateSpace* est[3] = {&eS, &eT, &eK};
-          for (int e = 0; e < 3; ++e) {
-            const std::vector<Eigen::MatrixXcd> G = frequency_response(*est[e], omega);
-            g[e].resize(F);
-            for (int k = 0; k < F; ++k) g[e](k) = G[k](0, 0);
-          }
-          for (int e = 0; e < 3; ++e)
-            if (!g[e].allFinite()) throw Error(ErrorKind::Numerical, "run", "non-finite estimate");
-          for (int e = 0; e < 3; ++e) {
-            acc.s[e] += g[e];
-            acc.s2[e] += g[e].cwiseAbs2();
-          }
-          ++acc.runs;
-        } catch (const Error&) {
-          ++acc.failures;
-        }
-      }
+      for (int i = b * kBlock; i < std::min(o.runs, (b + 1) * kBlock); ++i) figure_run(o, su, i, U_l, Y_l, sums[b]);
       progress.add(std::min(o.runs, (b + 1) * kBlock) - b * kBlock);
     }
   };
@@ -319,6 +358,17 @@ FigureResult reproduce_pintelon_figure(const FigureOptions& o) {
     total.runs += b.runs;
     total.failures += b.failures;
   }
+  return total;
+}
+
+// Purpose: the figure's curves from the sums: means, standard deviations,
+// the ratio std(G(θ̂_S)) / std(G(θ̂)), Eq. (28)'s theory curve and Eq. (30)'s
+// bound √((M − 2)/(M − 3)).
+// Method: sample variance of complex G, (Σ|G|² − R |mean|²) / (R − 1).
+// Fails: Error(Numerical) when fewer than 2 runs succeeded.
+// References: Pintelon (2002) Eqs. (28), (30), Figs. 1-2.
+FigureResult figure_statistics(const FigureOptions& o, const FigureSetup& su, const FigureSums& total) {
+  const int F = o.F;
   FigureResult res;
   res.runs = total.runs;
   res.failures = total.failures;
@@ -330,16 +380,15 @@ FigureResult reproduce_pintelon_figure(const FigureOptions& o) {
   Eigen::VectorXcd mean[3];
   for (int e = 0; e < 3; ++e) {
     mean[e] = total.s[e] / R;
-    // Sample variance of complex G: (Σ|G|² − R |mean|²) / (R − 1).
     sd[e] = ((total.s2[e] - R * mean[e].cwiseAbs2()) / (R - 1)).cwiseMax(0.0).cwiseSqrt();
   }
-  res.frequency = (omega / (2 * M_PI)).eval();
+  res.frequency = (su.omega / (2 * M_PI)).eval();
   res.std_sample = sd[0];
   res.std_subspace = sd[1];
   res.std_known_alpha = sd[2];
   res.mean_sample = mean[0];
   res.mean_subspace = mean[1];
-  res.truth = G0;
+  res.truth = su.G0;
   res.ratio = sd[0].cwiseQuotient(sd[1]);
   res.theory = (1.0 + sd[2].cwiseAbs2().cwiseQuotient((o.M - 3) * sd[1].cwiseAbs2()).array()).sqrt().matrix();
   res.bound = std::sqrt(double(o.M - 2) / (o.M - 3));
@@ -347,6 +396,14 @@ FigureResult reproduce_pintelon_figure(const FigureOptions& o) {
   std::nth_element(r.begin(), r.begin() + F / 2, r.end());
   res.median_ratio = r[F / 2];
   return res;
+}
+
+}  // namespace
+
+FigureResult reproduce_pintelon_figure(const FigureOptions& o) {
+  check_figure_options(o);
+  const FigureSetup setup = figure_setup(o);
+  return figure_statistics(o, setup, figure_monte_carlo(o, setup));
 }
 
 }  // namespace fdsid

@@ -324,106 +324,183 @@ int order_from_singular_values(const Eigen::VectorXd& sv, int n_max, int& gap_in
   return best;
 }
 
-SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions& opt) {
-  const int m = data.m, M = data.M, N = 2 * M;
+namespace {
+
+// Sizes of one identification: m channels, M+1 samples, N = 2M, and the p, r of 𝒴.
+struct Dims {
+  int m, M, N, p, r;
+};
+
+// Input checks and defaults.
+//
+// Purpose: validate the samples and the options, and fix p and r.
+// Method: p, r from default_pr() where the options leave them 0, then the
+// inequalities of step 2 (check_pr) with n = max(order, 1).
+// Numerical aspects: the work and memory of steps 1-3 and 8 are estimated
+// before anything large is allocated: the SVD of step 3 is O((pm)² rm) and
+// holds 𝒴 and its factors (3 (pm)(rm) doubles); steps 1-2 hold N m² complex
+// inputs and real outputs; step 8 works on M+1 samples.
+// Fails: Error(Input) on a malformed or non-finite sample matrix, Error(Order)
+// on a negative order, Error(Dimension) from check_pr, Error(Resource) when
+// the SVD or the memory would be beyond what fdsid supports.
+Dims check_input(const SpectrumData& data, const SpectrumOptions& opt) {
+  Dims d{data.m, data.M, 2 * data.M, opt.p, opt.r};
+  const int m = d.m, M = d.M, N = d.N;
   if (m < 1) throw Error(ErrorKind::Input, "spectrum", "need at least one channel");
   if (data.S.rows() != m * m || data.S.cols() != M + 1)
     throw Error(ErrorKind::Input, "spectrum", "sample matrix is not (m*m) x (M+1)");
   if (!data.S.allFinite()) throw Error(ErrorKind::Input, "spectrum", "a sample is NaN or infinite");
   if (opt.order < 0) throw Error(ErrorKind::Order, "step 4", "order must be positive");
-
-  SpectrumResult res;
-  res.method = opt.method;
-  res.extension = opt.extension;
-  res.N = N;
-  int p = opt.p, r = opt.r;
-  {
-    int dp, dr;
-    default_pr(M, opt.order, dp, dr);
-    if (p == 0) p = dp;
-    if (r == 0) r = dr;
-  }
+  int dp, dr;
+  default_pr(M, opt.order, dp, dr);
+  if (d.p == 0) d.p = dp;
+  if (d.r == 0) d.r = dr;
+  const int p = d.p, r = d.r;
   check_pr(N, std::max(opt.order, 1), p, r);
-  // Work and memory before anything large is allocated: the SVD of step 3 is
-  // O((pm)² rm) and holds 𝒴 and its factors (3 (pm)(rm) doubles); steps 1-2
-  // hold N m² complex inputs and real outputs; step 8 works on M+1 samples.
-  {
-    const double pm = double(p) * m, rm = double(r) * m;
-    if (pm > kMaxSvdDimension || rm > kMaxSvdDimension)
-      throw Error(ErrorKind::Resource, "step 3",
-                  "the SVD of a " + std::to_string(static_cast<long long>(pm)) + " x " +
-                      std::to_string(static_cast<long long>(rm)) + " matrix is beyond the supported " +
-                      std::to_string(kMaxSvdDimension) + " (p m and r m; its O((pm)^2 rm) work would not finish)");
-    require_memory(8.0 * (3 * pm * rm + 3.0 * N * m * m + 4.0 * (M + 1) * m * m), "identify-spectrum",
-                   "Algorithm 1 with M = " + std::to_string(M) + ", m = " + std::to_string(m) + ", p = " +
-                       std::to_string(p) + ", r = " + std::to_string(r));
-  }
-  res.p = p;
-  res.r = r;
+  const double pm = double(p) * m, rm = double(r) * m;
+  if (pm > kMaxSvdDimension || rm > kMaxSvdDimension)
+    throw Error(ErrorKind::Resource, "step 3",
+                "the SVD of a " + std::to_string(static_cast<long long>(pm)) + " x " +
+                    std::to_string(static_cast<long long>(rm)) + " matrix is beyond the supported " +
+                    std::to_string(kMaxSvdDimension) + " (p m and r m; its O((pm)^2 rm) work would not finish)");
+  require_memory(8.0 * (3 * pm * rm + 3.0 * N * m * m + 4.0 * (M + 1) * m * m), "identify-spectrum",
+                 "Algorithm 1 with M = " + std::to_string(M) + ", m = " + std::to_string(m) + ", p = " +
+                     std::to_string(p) + ", r = " + std::to_string(r));
+  return d;
+}
 
-  // Steps 1-2: extension and inverse DFT (Eq. 20).
-  const double* shat_N = unscaled_fourier_coefficients(data, opt.extension);  // N ŝ_k
-  // ŝ_0 is the zero-lag covariance R_0 = E + aliasing (Eq. 20 at k = 0): a power
-  // spectrum has a positive definite one. Individual noisy samples may dip below
-  // zero where S is small (Section 4's data do), so this is the check on the data.
-  {
-    const Eigen::Map<const Eigen::MatrixXd> s0(shat_N, m, m);
-    const Eigen::MatrixXd h = 0.5 * (s0 + s0.transpose());
-    const double l0 = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(h, Eigen::EigenvaluesOnly).eigenvalues()(0);
-    if (!(l0 > 0.0))
-      throw Error(ErrorKind::Positivity, "step 2",
-                  "data are not a power spectrum: the mean of the samples (zero-lag covariance) is not positive "
-                  "definite (smallest eigenvalue " + fmt(l0, 4) + ")");
-  }
-  // Step 3: SVD of 𝒴 (Eq. 19) or of Ĝ_p F_r (Eq. 13).
-  const Eigen::MatrixXd Y = (opt.method == Method::Akcay2011 ? akcay_matrix(shat_N, N, m, p, r)
-                                                             : hankel(shat_N, m, p, r, 0)) /
-                            static_cast<double>(N);
-  // One-sided Jacobi (with QR preconditioning), not BDCSVD: Eigen 3.4.0's
-  // divide-and-conquer returned σ_{2n} wrong in the 4th digit on a 100 x 100 𝒴
-  // with pairs of equal singular values (a symmetric MIMO case found by the
-  // property suite), which ruined interpolation. Jacobi is accurate to high
-  // relative accuracy and costs ~1 ms at 50 x 50.
+// Steps 1-2: extension of the M+1 samples to N and inverse DFT (Eq. 20).
+//
+// Purpose: the Fourier coefficients N ŝ_k, k = 0..N-1, as an (m*m) x N
+// column-major array (valid until the next call on this thread).
+// Method: unscaled_fourier_coefficients (one FFTW complex-to-real transform
+// per entry). ŝ_0 is the zero-lag covariance R_0 = E + aliasing (Eq. 20 at
+// k = 0): a power spectrum has a positive definite one. Individual noisy
+// samples may dip below zero where S is small (Section 4's data do), so this
+// is the check on the data.
+// Fails: Error(Positivity) when the symmetric part of ŝ_0 is not positive
+// definite; Error(Dimension) or Error(Numerical) from the transform.
+// References: Akçay (2011) Algorithm 1 steps 1-2, Eq. (20).
+const double* step1_2_fourier_coefficients(const SpectrumData& data, Extension ext) {
+  const int m = data.m;
+  const double* shat_N = unscaled_fourier_coefficients(data, ext);
+  const Eigen::Map<const Eigen::MatrixXd> s0(shat_N, m, m);
+  const Eigen::MatrixXd h = 0.5 * (s0 + s0.transpose());
+  const double l0 = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(h, Eigen::EigenvaluesOnly).eigenvalues()(0);
+  if (!(l0 > 0.0))
+    throw Error(ErrorKind::Positivity, "step 2",
+                "data are not a power spectrum: the mean of the samples (zero-lag covariance) is not positive "
+                "definite (smallest eigenvalue " + fmt(l0, 4) + ")");
+  return shat_N;
+}
+
+// The range space of step 3: the singular values and the thin left factor.
+struct RangeSpace {
+  Eigen::VectorXd singular_values;
+  Eigen::MatrixXd U;
+};
+
+// Step 3: SVD of 𝒴 (Eq. 19) or of Ĝ_p F_r (Eq. 13).
+//
+// Purpose: the singular values and left singular vectors of the pm x rm matrix.
+// Method: 𝒴 is a sum of two block Hankel matrices of the Fourier coefficients
+// (Eq. 19); Van Overschee et al. use the first alone (Eq. 13). One-sided
+// Jacobi SVD with QR preconditioning.
+// Numerical aspects: Jacobi, not BDCSVD: Eigen 3.4.0's divide-and-conquer
+// returned σ_{2n} wrong in the 4th digit on a 100 x 100 𝒴 with pairs of equal
+// singular values (a symmetric MIMO case found by the property suite), which
+// ruined interpolation. Jacobi is accurate to high relative accuracy and
+// costs ~1 ms at 50 x 50.
+// References: Akçay (2011) Eqs. (13), (19); Van Overschee et al. (1997).
+RangeSpace step3_range_space(const double* shat_N, Method method, const Dims& d) {
+  const Eigen::MatrixXd Y = (method == Method::Akcay2011 ? akcay_matrix(shat_N, d.N, d.m, d.p, d.r)
+                                                         : hankel(shat_N, d.m, d.p, d.r, 0)) /
+                            static_cast<double>(d.N);
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(Y, Eigen::ComputeThinU);
-  res.singular_values = svd.singularValues();
+  return {svd.singularValues(), svd.matrixU()};
+}
 
-  // Step 4: order.
-  int n = opt.order;
-  if (n == 0) {
-    const int n_max = std::min((p - 1) / 2, r / 2);
-    n = order_from_singular_values(res.singular_values, n_max, res.gap_index, res.gap_ratio);
-    res.order_from_data = true;
+// The order of step 4 and the singular-value gap it was read at.
+struct Order {
+  int n = 0;
+  bool from_data = false;
+  int gap_index = 0;
+  double gap_ratio = 0.0;
+};
+
+// Step 4: the order n.
+//
+// Purpose: n given by the options, or read from the singular values (𝒴 has
+// rank 2n).
+// Method: order_from_singular_values (the largest σ_{2n}/σ_{2n+1} for
+// n <= min((p-1)/2, r/2)); for a given n, the ratio at 2n is reported
+// (infinite when σ_{2n+1} does not exist).
+// Fails: Error(Order) when no order can be read; Error(Dimension) when the
+// order violates p > 2n, r >= 2n (check_pr).
+// References: Akçay (2011) Algorithm 1 step 4.
+Order step4_order(const Eigen::VectorXd& sv, int given, const Dims& d) {
+  Order o;
+  o.n = given;
+  if (o.n == 0) {
+    const int n_max = std::min((d.p - 1) / 2, d.r / 2);
+    o.n = order_from_singular_values(sv, n_max, o.gap_index, o.gap_ratio);
+    o.from_data = true;
   } else {
-    res.gap_index = 2 * n;
-    res.gap_ratio = 2 * n < res.singular_values.size()
-                        ? res.singular_values(2 * n - 1) / std::max(res.singular_values(2 * n), 1e-300)
-                        : std::numeric_limits<double>::infinity();
+    const int n = o.n;
+    o.gap_index = 2 * n;
+    o.gap_ratio = 2 * n < sv.size() ? sv(2 * n - 1) / std::max(sv(2 * n), 1e-300)
+                                    : std::numeric_limits<double>::infinity();
   }
-  check_pr(N, n, p, r);
-  res.order = n;
-  const Eigen::MatrixXd U = svd.matrixU().leftCols(2 * n);
+  check_pr(d.N, o.n, d.p, d.r);
+  return o;
+}
 
-  // Step 5: Ã from the shift equations.
-  const Eigen::MatrixXd Atilde = shift_matrix(U, m);
+// Step 5: Ã from the shift equations.
+//
+// Purpose: the 2n x 2n matrix Ã with J_u U_{2n} = J_d U_{2n} Ã.
+// Method: shift_matrix (Householder QR of J_d U_{2n}).
+// Fails: Error(Numerical) when Ã is not finite.
+// References: Akçay (2011) Algorithm 1 step 5.
+Eigen::MatrixXd step5_shift_equations(const Eigen::MatrixXd& U2n, int m) {
+  Eigen::MatrixXd Atilde = shift_matrix(U2n, m);
   if (!Atilde.allFinite()) throw Error(ErrorKind::Numerical, "step 5", "shift equations gave a non-finite A");
+  return Atilde;
+}
 
-  // Step 6: eigen-decomposition of Ã and the split |λ| < 1 (causal) / > 1.
+// The eigen-decomposition of step 6 and the indices of its stable part.
+struct Split {
+  Eigen::VectorXcd lambda;
+  Eigen::MatrixXcd V;
+  std::vector<int> stable;  // i with |λ_i| < 1
+  double margin = std::numeric_limits<double>::infinity();  // min | |λ_i| - 1 |
+};
+
+// Step 6: eigen-decomposition of Ã and the split |λ| < 1 (causal) / > 1.
+//
+// Purpose: the n eigenvalues of Ã inside the unit circle and their eigenvectors.
+// Method: Eigen::EigenSolver; the left eigenvectors (rows of V^{-1}, with
+// y_i^H x_i = 1) give the eigenvalue condition numbers κ_i = ||x_i|| ||y_i||.
+// Numerical aspects: |λ_i| can only be trusted to about κ_i u ||Ã||: a split
+// closer than 10 times that to the circle is not a split.
+// Fails: Error(Split) when the decomposition does not converge, an eigenvalue
+// lies within its rounding error of the circle (or is not finite), or not
+// exactly n of the 2n eigenvalues lie inside.
+// References: Akçay (2011) Algorithm 1 step 6.
+Split step6_stable_split(const Eigen::MatrixXd& Atilde, int n) {
   Eigen::EigenSolver<Eigen::MatrixXd> es(Atilde);
   if (es.info() != Eigen::Success) throw Error(ErrorKind::Split, "step 6", "eigen-decomposition of A did not converge");
-  const Eigen::VectorXcd lambda = es.eigenvalues();
-  const Eigen::MatrixXcd V = es.eigenvectors();
-  const Eigen::MatrixXcd W = V.inverse();  // rows: left eigenvectors with y_i^H x_i = 1
+  Split sp;
+  sp.lambda = es.eigenvalues();
+  sp.V = es.eigenvectors();
+  const Eigen::VectorXcd& lambda = sp.lambda;
+  const Eigen::MatrixXcd W = sp.V.inverse();  // rows: left eigenvectors with y_i^H x_i = 1
   const double normA = Atilde.norm();
-  std::vector<int> stable;
-  double margin = std::numeric_limits<double>::infinity();
   std::ostringstream moduli;
   for (int i = 0; i < 2 * n; ++i) {
     const double mod = std::abs(lambda(i));
-    const double kappa = V.col(i).norm() * W.row(i).norm();  // eigenvalue condition number
-    // |λ| can only be trusted to about κ u ||Ã||: a split closer than 10 times that
-    // to the circle is not a split.
+    const double kappa = sp.V.col(i).norm() * W.row(i).norm();  // eigenvalue condition number
     const double resolution = 10.0 * kappa * kUnitRoundoff * normA;
-    margin = std::min(margin, std::abs(mod - 1.0));
+    sp.margin = std::min(sp.margin, std::abs(mod - 1.0));
     if (std::abs(mod - 1.0) <= resolution || !std::isfinite(mod)) {
       throw Error(ErrorKind::Split, "step 6",
                   "eigenvalue " + fmt(lambda(i).real(), 10) + (lambda(i).imag() < 0 ? "" : "+") +
@@ -431,53 +508,85 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
                       ", within its rounding error " + fmt(resolution, 3) + " of the unit circle");
     }
     moduli << (i ? ", " : "") << fmt(mod, 4);
-    if (mod < 1.0) stable.push_back(i);
+    if (mod < 1.0) sp.stable.push_back(i);
   }
-  res.split_margin = margin;
-  if (static_cast<int>(stable.size()) != n)
+  if (static_cast<int>(sp.stable.size()) != n)
     throw Error(ErrorKind::Split, "step 6",
-                "no stable/antistable split: " + std::to_string(stable.size()) + " of the 2n = " +
+                "no stable/antistable split: " + std::to_string(sp.stable.size()) + " of the 2n = " +
                     std::to_string(2 * n) + " eigenvalues of A lie inside the unit circle, n = " + std::to_string(n) +
                     " needed (moduli " + moduli.str() + ")");
+  return sp;
+}
 
-  // Step 7: Â = Σ_c and Ĉ = J_f U_{2n} Π_c, in the real block-diagonal basis
-  // T = [x] for real λ, [Re x, Im x] for λ = a + ib, b > 0 (Ã x = λ x gives
-  // Ã [Re x, Im x] = [Re x, Im x] [[a, b], [-b, a]]).
-  Eigen::MatrixXd T(2 * n, n);
+// Â, Ĉ of step 7 in the real block-diagonal basis, with the blocks of Â.
+struct StableRealization {
+  Eigen::MatrixXd A, C;
   std::vector<Block> blocks;
-  Eigen::MatrixXd Ahat = Eigen::MatrixXd::Zero(n, n);
+};
+
+// Step 7: Â = Σ_c and Ĉ = J_f U_{2n} Π_c.
+//
+// Purpose: the stable part of Ã as a real pair (Â, Ĉ).
+// Method: the real block-diagonal basis T = [x] for real λ, [Re x, Im x] for
+// λ = a + ib, b > 0 (Ã x = λ x gives Ã [Re x, Im x] = [Re x, Im x] [[a, b],
+// [-b, a]]), columns scaled to unit norm per eigenvector; Ĉ = (first block
+// row of U_{2n}) T.
+// Fails: Error(Split) when the stable eigenvalues do not form conjugate pairs.
+// References: Akçay (2011) Algorithm 1 step 7.
+StableRealization step7_A_C(const Split& sp, const Eigen::MatrixXd& U2n, int m, int n) {
+  Eigen::MatrixXd T(2 * n, n);
+  StableRealization sr;
+  sr.A = Eigen::MatrixXd::Zero(n, n);
   int col = 0;
-  for (int i : stable) {
-    const cplx l = lambda(i);
+  for (int i : sp.stable) {
+    const cplx l = sp.lambda(i);
     if (l.imag() == 0.0) {
-      Eigen::VectorXd x = V.col(i).real();
+      Eigen::VectorXd x = sp.V.col(i).real();
       T.col(col) = x / x.norm();
-      Ahat(col, col) = l.real();
-      blocks.push_back({col, 1, l.real(), 0.0});
+      sr.A(col, col) = l.real();
+      sr.blocks.push_back({col, 1, l.real(), 0.0});
       ++col;
     } else if (l.imag() > 0.0) {
       if (col + 2 > n)
         throw Error(ErrorKind::Split, "step 6", "complex eigenvalue without its conjugate among the stable ones");
-      const double s = V.col(i).norm();
-      T.col(col) = V.col(i).real() / s;
-      T.col(col + 1) = V.col(i).imag() / s;
-      Ahat(col, col) = l.real();
-      Ahat(col, col + 1) = l.imag();
-      Ahat(col + 1, col) = -l.imag();
-      Ahat(col + 1, col + 1) = l.real();
-      blocks.push_back({col, 2, l.real(), l.imag()});
+      const double s = sp.V.col(i).norm();
+      T.col(col) = sp.V.col(i).real() / s;
+      T.col(col + 1) = sp.V.col(i).imag() / s;
+      sr.A(col, col) = l.real();
+      sr.A(col, col + 1) = l.imag();
+      sr.A(col + 1, col) = -l.imag();
+      sr.A(col + 1, col + 1) = l.real();
+      sr.blocks.push_back({col, 2, l.real(), l.imag()});
       col += 2;
     }
   }
   if (col != n) throw Error(ErrorKind::Split, "step 6", "stable eigenvalues do not form conjugate pairs");
-  const Eigen::MatrixXd Chat = U.topRows(m) * T;
+  sr.C = U2n.topRows(m) * T;
+  return sr;
+}
 
-  // Step 8: Ê, F̂ by least squares over all M+1 samples (chunked Householder QR).
-  SummandDesign design(Chat, blocks, m);
+// Step 8: Ê, F̂ by least squares over all M+1 samples.
+//
+// Purpose: θ = [vec F̂, Ê_ab for a <= b] minimising Σ_k ||Ŝ(z_k) - S_k||_F²,
+// Ŝ = Ê + X + X^H, X = Ĉ (zI - Â)^{-1} F̂; writes Ê and F̂ into s.
+// Method: the real design of SummandDesign, one group of rows per grid
+// sample, reduced to R of the augmented design [Φ | y] by the streamed QR
+// (numerics/qr.hpp): one block (the fill walks the grid per chunk) and 1024
+// rows per chunk, the chunking this step has always used; θ by back
+// substitution.
+// Numerical aspects: the condition of Φ is not squared (no normal equations).
+// The rank test is numerics/rank.hpp's with size factor 10 (floor
+// 1e3·u·max|r_ii|, the value this step has always used). The √rows factor of
+// the Householder bound would be √((M+1)·rps), larger than 10 whenever
+// (M+1)·rps > 100; it is kept at 10 so that no result changes (see the
+// numerics layer's report).
+// Fails: Error(Dimension) with fewer equations than unknowns,
+// Error(Numerical) when the problem is rank deficient.
+// References: Akçay (2011) Algorithm 1 step 8.
+Eigen::VectorXd step8_least_squares_EF(const SpectrumData& data, const StableRealization& sr, SpectralSummands& s) {
+  const int m = data.m, M = data.M, n = static_cast<int>(sr.A.rows());
+  SummandDesign design(sr.C, sr.blocks, m);
   const int q = design.unknowns(), rps = design.rows_per_sample();
-  // R of the augmented design [Φ | y] by the streamed QR (numerics/qr.hpp), one
-  // group per grid sample, one block (the fill walks the grid per chunk) and
-  // 1024 rows per chunk, the chunking this step has always used.
   if (static_cast<long long>(M + 1) * rps < q)
     throw Error(ErrorKind::Dimension, "step 8", "fewer equations than unknowns in the E, F fit");
   numerics::StreamedQrOptions qr_options;
@@ -496,131 +605,195 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
   const Eigen::MatrixXd Rq = R.topLeftCorner(q, q);
   const Eigen::VectorXd rdiag = Rq.diagonal().cwiseAbs();
   const double rmax = rdiag.maxCoeff(), rmin = rdiag.minCoeff();
-  // Rank test of numerics/rank.hpp with size factor 10 (floor 1e3·u·max|r_ii|,
-  // the value this step has always used). The √rows factor of the Householder
-  // bound would be √((M+1)·rps), larger than 10 whenever (M+1)·rps > 100; it is
-  // kept at 10 so that no result changes (see the numerics layer's report).
   if (!numerics::numerically_full_rank(rdiag, 10.0))
     throw Error(ErrorKind::Numerical, "step 8", "E, F least-squares problem is rank deficient (|r_min|/|r_max| = " +
                                                     fmt(rmin / rmax, 3) + ")");
-  const Eigen::VectorXd theta = Rq.triangularView<Eigen::Upper>().solve(R.col(q).head(q));
-
-  SpectralSummands& s = res.summands;
-  s.A = Ahat;
-  s.C = Chat;
+  Eigen::VectorXd theta = Rq.triangularView<Eigen::Upper>().solve(R.col(q).head(q));
+  s.A = sr.A;
+  s.C = sr.C;
   s.F = Eigen::Map<const Eigen::MatrixXd>(theta.data(), n, m);
   s.E.resize(m, m);
   for (int a = 0; a < m; ++a)
     for (int b = a; b < m; ++b) s.E(a, b) = s.E(b, a) = theta(n * m + design.e_position(a, b));
+  return theta;
+}
 
-  // Ŝ must be positive on the grid, or no spectral factor exists.
-  {
-    Eigen::MatrixXd D(rps, q);
-    Eigen::VectorXd values(rps);
-    double worst = std::numeric_limits<double>::infinity();
-    int worst_k = 0;
-    GridWalker grid(0, M);
-    for (int k = 0; k <= M; ++k, grid.next()) {
-      double v;
-      if (m == 1) {  // Ŝ(z_k) = row · θ, without the general path's temporaries
-        design.scalar_row(grid.z(), D.data(), 1);
-        v = D.row(0).dot(theta);
-      } else {
-        design.rows(grid.z(), nullptr, k, D, values);
-        values.noalias() = D * theta;
-        v = min_hermitian_eigenvalue(unpack_hermitian(values, m));
-      }
-      if (v < worst) {
-        worst = v;
-        worst_k = k;
-      }
+// Step 8's check: Ŝ must be positive on the grid, or no spectral factor exists.
+//
+// Purpose: min over k of λ_min(Ŝ(z_k)) for the fitted θ.
+// Method: Ŝ(z_k) from the design rows times θ (m = 1: one row, without the
+// general path's temporaries), the smallest eigenvalue of its Hermitian form.
+// Fails: Error(Positivity) when the minimum is not positive, naming ω.
+// References: Akçay (2011) Algorithm 1 step 8.
+double step8_fitted_spectrum_minimum(const StableRealization& sr, const Eigen::VectorXd& theta, int m, int M) {
+  SummandDesign design(sr.C, sr.blocks, m);
+  const int q = design.unknowns(), rps = design.rows_per_sample();
+  Eigen::MatrixXd D(rps, q);
+  Eigen::VectorXd values(rps);
+  double worst = std::numeric_limits<double>::infinity();
+  int worst_k = 0;
+  GridWalker grid(0, M);
+  for (int k = 0; k <= M; ++k, grid.next()) {
+    double v;
+    if (m == 1) {
+      design.scalar_row(grid.z(), D.data(), 1);
+      v = D.row(0).dot(theta);
+    } else {
+      design.rows(grid.z(), nullptr, k, D, values);
+      values.noalias() = D * theta;
+      v = min_hermitian_eigenvalue(unpack_hermitian(values, m));
     }
-    res.min_spectrum = worst;
-    if (!(worst > 0.0))
-      throw Error(ErrorKind::Positivity, "step 8",
-                  "estimated spectrum is not positive on the grid: smallest eigenvalue " + fmt(worst, 4) +
-                      " at omega = " + fmt(M_PI * worst_k / M, 6) + " rad/sample (k = " + std::to_string(worst_k + 1) +
-                      ")");
+    if (v < worst) {
+      worst = v;
+      worst_k = k;
+    }
   }
+  if (!(worst > 0.0))
+    throw Error(ErrorKind::Positivity, "step 8",
+                "estimated spectrum is not positive on the grid: smallest eigenvalue " + fmt(worst, 4) +
+                    " at omega = " + fmt(M_PI * worst_k / M, 6) + " rad/sample (k = " + std::to_string(worst_k + 1) +
+                    ")");
+  return worst;
+}
+
+// What step 9 adds to the summands: the Riccati solution and its report.
+struct RiccatiStep {
+  std::string method;
+  int iterations = 0;
+  double residual = 0.0;
+  double max_zero_modulus = 0.0;
+};
+
+// Step 9: Riccati equation, B̂ and D̂.
+//
+// Purpose: the stabilising solution P̂ of the spectral Riccati equation of
+// (Â, Ĉ, Ê, F̂) (written into s.P) and the minimum-phase factor
+// (Â, B̂, Ĉ, D̂) with D̂ D̂ᵀ = Ê - Ĉ P̂ Ĉᵀ, B̂ = (F̂ - Â P̂ Ĉᵀ) D̂^{-1}.
+// Method: numerics/riccati.hpp (SDA, else the Riccati difference iteration);
+// D̂ the symmetric square root.
+// Numerical aspects: the stabilising solution makes Ĝ minimum phase: the
+// zeros, eig(Â - B̂ D̂^{-1} Ĉ), lie inside the circle. If they do not, the
+// Riccati equation had no stabilising solution -- the fitted spectrum is not
+// positive on the whole circle, only on the grid -- and no spectral factor
+// exists.
+// Fails: Error(Positivity) when Ê or Ê - Ĉ P̂ Ĉᵀ is not positive definite,
+// Error(Riccati) when no stabilising solution is found, Error(Numerical) when
+// B̂ or D̂ is not finite.
+// References: Akçay (2011) Algorithm 1 step 9; Chu, Fan, Lin (2005) (SDA).
+RiccatiStep step9_riccati_B_D(SpectralSummands& s, StateSpace& g) {
   {
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eE(s.E, Eigen::EigenvaluesOnly);
     if (!(eE.eigenvalues()(0) > 0.0))
       throw Error(ErrorKind::Positivity, "step 9", "E is not positive definite (smallest eigenvalue " +
                                                        fmt(eE.eigenvalues()(0), 4) + ")");
   }
-
-  // Step 9: Riccati equation (numerics/riccati.hpp: SDA, else the Riccati
-  // difference iteration).
-  const numerics::RiccatiOptions riccati_options;
-  numerics::RiccatiSolution sol = numerics::solve_spectral_riccati(s, riccati_options);
-  res.riccati_method = sol.method;
-  const int its = sol.iterations;
+  RiccatiStep rs;
+  numerics::RiccatiSolution sol = numerics::solve_spectral_riccati(s, numerics::RiccatiOptions());
+  rs.method = sol.method;
   if (!sol.ok) throw Error(ErrorKind::Riccati, "step 9", "no stabilising solution found (SDA and Kalman iteration failed)");
   const Eigen::MatrixXd P = std::move(sol.P);
   s.P = P;
-  res.riccati_iterations = its;
-  res.riccati_residual = numerics::riccati_residual(s, P);
+  rs.iterations = sol.iterations;
+  rs.residual = numerics::riccati_residual(s, P);
   const Eigen::MatrixXd Rinn = s.E - s.C * P * s.C.transpose();
-  {
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eR(Rinn, Eigen::EigenvaluesOnly);
-    if (!(eR.eigenvalues()(0) > 0.0))
-      throw Error(ErrorKind::Positivity, "step 9",
-                  "E - C P C^T is not positive definite (smallest eigenvalue " + fmt(eR.eigenvalues()(0), 4) + ")");
-  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eR(Rinn, Eigen::EigenvaluesOnly);
+  if (!(eR.eigenvalues()(0) > 0.0))
+    throw Error(ErrorKind::Positivity, "step 9",
+                "E - C P C^T is not positive definite (smallest eigenvalue " + fmt(eR.eigenvalues()(0), 4) + ")");
   Eigen::MatrixXd Dhat, Dinv;
   sqrt_spd(Rinn, Dhat, Dinv);
-  StateSpace& g = res.model;
   g.domain = Domain::Discrete;
   g.sample_time = 1.0;
-  g.A = Ahat;
-  g.C = Chat;
-  g.B = (s.F - Ahat * P * Chat.transpose()) * Dinv;
+  g.A = s.A;
+  g.C = s.C;
+  g.B = (s.F - s.A * P * s.C.transpose()) * Dinv;
   g.D = Dhat;
-  if (!g.B.allFinite() || !g.D.allFinite())
-    throw Error(ErrorKind::Numerical, "step 9", "B or D is not finite");
-  // The stabilising solution makes Ĝ minimum phase: the zeros, eig(Â - B̂ D̂^{-1} Ĉ),
-  // lie inside the circle. If they do not, the Riccati equation had no stabilising
-  // solution -- the fitted spectrum is not positive on the whole circle, only on
-  // the grid -- and no spectral factor exists.
-  {
-    const Eigen::MatrixXd Z = Ahat - g.B * Dinv * Chat;
-    const double zmax = n > 0 ? Z.eigenvalues().cwiseAbs().maxCoeff() : 0.0;
-    res.max_zero_modulus = zmax;
-    if (!(zmax < 1.0))
-      throw Error(ErrorKind::Riccati, "step 9",
-                  "no stabilising solution: the spectral factor has a zero of modulus " + fmt(zmax, 12) +
-                      " (the estimated spectrum is not positive between the grid points)");
+  if (!g.B.allFinite() || !g.D.allFinite()) throw Error(ErrorKind::Numerical, "step 9", "B or D is not finite");
+  const Eigen::MatrixXd Z = s.A - g.B * Dinv * s.C;
+  rs.max_zero_modulus = s.A.rows() > 0 ? Z.eigenvalues().cwiseAbs().maxCoeff() : 0.0;
+  if (!(rs.max_zero_modulus < 1.0))
+    throw Error(ErrorKind::Riccati, "step 9",
+                "no stabilising solution: the spectral factor has a zero of modulus " + fmt(rs.max_zero_modulus, 12) +
+                    " (the estimated spectrum is not positive between the grid points)");
+  return rs;
+}
+
+// Step 10's companion: where double precision may have lost accuracy.
+//
+// Purpose: res.error_estimate and res.warnings (m channels).
+// Method: double_precision_spectrum_tolerance (fdsid/compare.hpp) at
+// σ_1/σ_2n, times κ = 1/(1 - ρ(Â)²): steps 8-9 solve Stein/Riccati-type
+// equations in Â, whose operator P ↦ P − Â P Âᵀ has condition ≥ 1/(1 − ρ²)
+// (its smallest singular value is at most 1 − ρ²), so near the circle it
+// amplifies the error of 𝒴's range. Warnings: estimate above 1e-6, an order
+// read from the data with σ_{2n+1}/σ_1 above the estimate, poles within 1e-3
+// of the circle, a Riccati residual above the default accept_residual 1e-8
+// (riccati.hpp).
+// Fails: never.
+void accuracy_warnings(SpectrumResult& res, int m) {
+  const int n = res.order;
+  const Eigen::VectorXd& sv = res.singular_values;
+  const Eigen::Index i2n = std::min<Eigen::Index>(2 * n, sv.size()) - 1;
+  const double ratio = i2n >= 0 && sv(i2n) > 0 ? sv(0) / sv(i2n) : std::numeric_limits<double>::infinity();
+  double kappa = 1.0;
+  if (n > 0) {
+    const double rho = res.model.A.eigenvalues().cwiseAbs().maxCoeff();
+    kappa = rho < 1.0 ? 1.0 / (1.0 - rho * rho) : std::numeric_limits<double>::infinity();
   }
-  // Step 10's companion: say where double precision may have lost accuracy.
-  {
-    const Eigen::Index i2n = std::min<Eigen::Index>(2 * n, res.singular_values.size()) - 1;
-    const double ratio = i2n >= 0 && res.singular_values(i2n) > 0 ? res.singular_values(0) / res.singular_values(i2n)
-                                                                  : std::numeric_limits<double>::infinity();
-    // Steps 8-9 solve Stein/Riccati-type equations in Â, whose operator
-    // P ↦ P − Â P Âᵀ has condition ≥ 1/(1 − ρ(Â)²) (its smallest singular value
-    // is at most 1 − ρ²): near the circle that amplifies the error of 𝒴's range.
-    double kappa = 1.0;
-    if (n > 0) {
-      const double rho = Ahat.eigenvalues().cwiseAbs().maxCoeff();
-      kappa = rho < 1.0 ? 1.0 / (1.0 - rho * rho) : std::numeric_limits<double>::infinity();
-    }
-    res.error_estimate = double_precision_spectrum_tolerance(p, r, m, N, ratio) * kappa;
-    if (!(res.error_estimate <= 1e-6))
-      res.warnings.push_back("double precision may have lost accuracy: estimated relative error " +
-                             fmt(res.error_estimate, 3) + " (sigma_1/sigma_2n = " + fmt(ratio, 3) +
-                             ", 1/(1 - rho^2) = " + fmt(kappa, 3) + "); compare with --precision high");
-    if (res.order_from_data && 2 * n < res.singular_values.size() &&
-        res.singular_values(2 * n) / res.singular_values(0) > res.error_estimate)
-      res.warnings.push_back("order read from the data: sigma_" + std::to_string(2 * n + 1) + "/sigma_1 = " +
-                             fmt(res.singular_values(2 * n) / res.singular_values(0), 3) +
-                             " is above the accuracy estimate, so a weak mode may have been left out");
-    if (n > 0 && res.split_margin < 1e-3)
-      res.warnings.push_back("poles within " + fmt(res.split_margin, 3) +
-                             " of the unit circle: the split of step 6 and the poles are ill-conditioned");
-    // The text names the default accept_residual, 1e-8 (riccati.hpp).
-    if (res.riccati_residual > riccati_options.accept_residual)
-      res.warnings.push_back("Riccati residual " + fmt(res.riccati_residual, 3) + " above 1e-8 (step 9)");
-  }
+  res.error_estimate = double_precision_spectrum_tolerance(res.p, res.r, m, res.N, ratio) * kappa;
+  if (!(res.error_estimate <= 1e-6))
+    res.warnings.push_back("double precision may have lost accuracy: estimated relative error " +
+                           fmt(res.error_estimate, 3) + " (sigma_1/sigma_2n = " + fmt(ratio, 3) +
+                           ", 1/(1 - rho^2) = " + fmt(kappa, 3) + "); compare with --precision high");
+  if (res.order_from_data && 2 * n < sv.size() && sv(2 * n) / sv(0) > res.error_estimate)
+    res.warnings.push_back("order read from the data: sigma_" + std::to_string(2 * n + 1) + "/sigma_1 = " +
+                           fmt(sv(2 * n) / sv(0), 3) +
+                           " is above the accuracy estimate, so a weak mode may have been left out");
+  if (n > 0 && res.split_margin < 1e-3)
+    res.warnings.push_back("poles within " + fmt(res.split_margin, 3) +
+                           " of the unit circle: the split of step 6 and the poles are ill-conditioned");
+  if (res.riccati_residual > numerics::RiccatiOptions().accept_residual)
+    res.warnings.push_back("Riccati residual " + fmt(res.riccati_residual, 3) + " above 1e-8 (step 9)");
+}
+
+}  // namespace
+
+SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions& opt) {
+  const Dims d = check_input(data, opt);
+  SpectrumResult res;
+  res.method = opt.method;
+  res.extension = opt.extension;
+  res.N = d.N;
+  res.p = d.p;
+  res.r = d.r;
+
+  const double* shat_N = step1_2_fourier_coefficients(data, opt.extension);  // N ŝ_k
+  RangeSpace range = step3_range_space(shat_N, opt.method, d);
+  res.singular_values = range.singular_values;
+
+  const Order order = step4_order(res.singular_values, opt.order, d);
+  const int n = order.n;
+  res.order = n;
+  res.order_from_data = order.from_data;
+  res.gap_index = order.gap_index;
+  res.gap_ratio = order.gap_ratio;
+  const Eigen::MatrixXd U2n = range.U.leftCols(2 * n);
+
+  const Eigen::MatrixXd Atilde = step5_shift_equations(U2n, d.m);
+  const Split split = step6_stable_split(Atilde, n);
+  res.split_margin = split.margin;
+  const StableRealization sr = step7_A_C(split, U2n, d.m, n);
+
+  const Eigen::VectorXd theta = step8_least_squares_EF(data, sr, res.summands);
+  res.min_spectrum = step8_fitted_spectrum_minimum(sr, theta, d.m, d.M);
+
+  const RiccatiStep ric = step9_riccati_B_D(res.summands, res.model);
+  res.riccati_method = ric.method;
+  res.riccati_iterations = ric.iterations;
+  res.riccati_residual = ric.residual;
+  res.max_zero_modulus = ric.max_zero_modulus;
+
+  accuracy_warnings(res, d.m);
   return res;
 }
 
