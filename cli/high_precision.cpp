@@ -139,60 +139,43 @@ int sample_spectrum_high(const std::string& model_path, int M, const std::string
   return 0;
 }
 
-int identify_frf_high(const std::string& json_path, const FrfHighRequest& q, const std::string& note) {
-  const std::string domain = q.continuous ? "continuous" : "discrete";
-  const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
-  reference::FrfResult res;
-  reference::Real sample_time = 1;
-  try {
-    reference::FrfData data;
-    if (!q.frf_path.empty()) {
-      data = reference::read_frf_csv(q.frf_path, domain);
-    } else {
-      int inputs = 0;
-      const Eigen::MatrixXd samples = read_records_csv(q.data_path, inputs);
-      const RecordMeta meta = read_meta(q.meta_path);
-      std::vector<std::vector<reference::Real>> channels(samples.cols());
-      char buf[40];
-      for (Eigen::Index c = 0; c < samples.cols(); ++c)
-        for (Eigen::Index t = 0; t < samples.rows(); ++t) {
-          std::snprintf(buf, sizeof buf, "%.17g", samples(t, c));  // the double's exact value
-          channels[c].push_back(reference::parse_decimal(buf));
-        }
-      const auto spectra = reference::period_spectra(channels, meta.period, meta.periods, meta.excited_lines);
-      std::vector<std::vector<reference::MatrixC>> U_l(meta.periods), Y_l(meta.periods);
-      const Eigen::Index outputs = samples.cols() - inputs;
-      for (int l = 0; l < meta.periods; ++l)
-        for (size_t k = 0; k < meta.excited_lines.size(); ++k) {
-          U_l[l].push_back(spectra[l][k].topRows(inputs));
-          Y_l[l].push_back(spectra[l][k].bottomRows(outputs));
-        }
-      sample_time = reference::parse_decimal([&] {
-        std::snprintf(buf, sizeof buf, "%.17g", meta.sample_time);
-        return std::string(buf);
-      }());
-      std::vector<reference::Real> omega;
-      const reference::Real two_pi = boost::multiprecision::atan(reference::Real(1)) * 8;
-      for (int k : meta.excited_lines)
-        omega.push_back(two_pi * k / meta.period / (q.continuous ? sample_time : reference::Real(1)));
-      data = reference::sample_statistics(domain, omega, U_l, Y_l).data;
+namespace {
+
+// The 50-digit value of a double, exactly (17 significant digits identify it).
+reference::Real exact(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", x);
+  return reference::parse_decimal(buf);
+}
+
+// Periodic records read by fast/'s reader, turned into the reference's sample
+// means and variances over the periods (Pintelon 2002 Section 4.1) in 50 digits.
+reference::FrfData records_high(const FrfHighRequest& q, const std::string& domain, reference::Real& sample_time) {
+  int inputs = 0;
+  const Eigen::MatrixXd samples = read_records_csv(q.data_path, inputs);
+  const RecordMeta meta = read_meta(q.meta_path);
+  std::vector<std::vector<reference::Real>> channels(samples.cols());
+  for (Eigen::Index c = 0; c < samples.cols(); ++c)
+    for (Eigen::Index t = 0; t < samples.rows(); ++t) channels[c].push_back(exact(samples(t, c)));
+  const auto spectra = reference::period_spectra(channels, meta.period, meta.periods, meta.excited_lines);
+  std::vector<std::vector<reference::MatrixC>> U_l(meta.periods), Y_l(meta.periods);
+  const Eigen::Index outputs = samples.cols() - inputs;
+  for (int l = 0; l < meta.periods; ++l)
+    for (size_t k = 0; k < meta.excited_lines.size(); ++k) {
+      U_l[l].push_back(spectra[l][k].topRows(inputs));
+      Y_l[l].push_back(spectra[l][k].bottomRows(outputs));
     }
-    reference::FrfOptions o;
-    o.order = q.order;
-    o.r = q.r;
-    o.continuous_method = q.orthogonal ? "orthogonal" : "bilinear";
-    if (q.omega_scale > 0) {
-      char buf[40];
-      std::snprintf(buf, sizeof buf, "%.17g", q.omega_scale);
-      o.omega_scale = reference::parse_decimal(buf);
-    }
-    res = reference::identify_frf(data, o);
-  } catch (const reference::StepError& e) {
-    throw Error(ErrorKind::Numerical, where, std::string("reference: ") + e.what());
-  } catch (const reference::Error& e) {
-    throw Error(ErrorKind::Input, where, e.what());
-  }
-  if (!q.data_path.empty() && !q.continuous) res.model.sample_time = sample_time;
+  sample_time = exact(meta.sample_time);
+  std::vector<reference::Real> omega;
+  const reference::Real two_pi = boost::multiprecision::atan(reference::Real(1)) * 8;
+  for (int k : meta.excited_lines)
+    omega.push_back(two_pi * k / meta.period / (q.continuous ? sample_time : reference::Real(1)));
+  return reference::sample_statistics(domain, omega, U_l, Y_l).data;
+}
+
+// The identified model's JSON, every number a 40-digit decimal string.
+json frf_high_json(const reference::FrfResult& res, const FrfHighRequest& q, const std::string& where,
+                   const std::string& note) {
   json j = reference::model_to_json(res.model, 40);
   j["order"] = res.order;
   j["r"] = res.r;
@@ -208,6 +191,32 @@ int identify_frf_high(const std::string& json_path, const FrfHighRequest& q, con
   j["data"] = where;
   j["precision"] = "high (50-digit binary floating point, Boost.Multiprecision cpp_bin_float<50>)";
   if (!note.empty()) j["note"] = note;
+  return j;
+}
+
+}  // namespace
+
+int identify_frf_high(const std::string& json_path, const FrfHighRequest& q, const std::string& note) {
+  const std::string domain = q.continuous ? "continuous" : "discrete";
+  const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
+  reference::FrfResult res;
+  reference::Real sample_time = 1;
+  try {
+    const reference::FrfData data =
+        !q.frf_path.empty() ? reference::read_frf_csv(q.frf_path, domain) : records_high(q, domain, sample_time);
+    reference::FrfOptions o;
+    o.order = q.order;
+    o.r = q.r;
+    o.continuous_method = q.orthogonal ? "orthogonal" : "bilinear";
+    if (q.omega_scale > 0) o.omega_scale = exact(q.omega_scale);
+    res = reference::identify_frf(data, o);
+  } catch (const reference::StepError& e) {
+    throw Error(ErrorKind::Numerical, where, std::string("reference: ") + e.what());
+  } catch (const reference::Error& e) {
+    throw Error(ErrorKind::Input, where, e.what());
+  }
+  if (!q.data_path.empty() && !q.continuous) res.model.sample_time = sample_time;
+  const json j = frf_high_json(res, q, where, note);
   if (json_path != "-") {
     std::cout << "identified order " << res.order << " in high precision, r = " << res.r << ", V_SUB = "
               << reference::to_decimal(res.v_sub, 6) << "\npoles:";
