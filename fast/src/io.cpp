@@ -93,6 +93,24 @@ double parse_cell(const std::string& cell, const std::string& where) {
   return x;
 }
 
+// The data rows after the header: blank lines skipped, every row split and
+// checked to have the header's `cols` fields, then handed with its place
+// ("NAME line K", lines counted 1-based from the header) to `row`.
+template <class Row>
+void for_each_csv_row(std::istream& in, const std::string& name, size_t cols, Row&& row) {
+  std::string line;
+  int lineno = 1;
+  while (std::getline(in, line)) {
+    ++lineno;
+    if (line.empty() || line == "\r") continue;
+    const auto cells = split_csv(line);
+    const std::string where = name + " line " + std::to_string(lineno);
+    if (cells.size() != cols)
+      input_error(where, "has " + std::to_string(cells.size()) + " fields, the header has " + std::to_string(cols));
+    row(cells, where);
+  }
+}
+
 }  // namespace
 
 StateSpace model_from_json(const nlohmann::json& j, const std::string& where) {
@@ -198,19 +216,12 @@ SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
   }
   std::vector<double> omega;
   std::vector<cplx> values;
-  int lineno = 1;
-  while (std::getline(in, line)) {
-    ++lineno;
-    if (line.empty() || line == "\r") continue;
-    const auto cells = split_csv(line);
-    const std::string where = name + " line " + std::to_string(lineno);
-    if (cells.size() != cols)
-      input_error(where, "has " + std::to_string(cells.size()) + " fields, the header has " + std::to_string(cols));
+  for_each_csv_row(in, name, cols, [&](const std::vector<std::string>& cells, const std::string& where) {
     omega.push_back(parse_cell(cells[0], where + " column omega"));
     for (int e = 0; e < entries; ++e)
       values.emplace_back(parse_cell(cells[1 + 2 * e], where + " column " + header[1 + 2 * e]),
                           parse_cell(cells[2 + 2 * e], where + " column " + header[2 + 2 * e]));
-  }
+  });
   if (omega.size() < 2) input_error(name, "needs at least 2 samples (M >= 1), found " + std::to_string(omega.size()));
   SpectrumData d;
   d.m = m;
@@ -275,15 +286,7 @@ FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain) 
   std::vector<double> omega;
   std::vector<Eigen::MatrixXcd> G;
   std::vector<Eigen::MatrixXd> var;
-  int lineno = 1;
-  while (std::getline(in, line)) {
-    ++lineno;
-    if (line.empty() || line == "\r") continue;
-    const auto cells = split_csv(line);
-    const std::string where = name + " line " + std::to_string(lineno);
-    if (cells.size() != header.size())
-      input_error(where, "has " + std::to_string(cells.size()) + " fields, the header has " +
-                             std::to_string(header.size()));
+  for_each_csv_row(in, name, header.size(), [&](const std::vector<std::string>& cells, const std::string& where) {
     omega.push_back(parse_cell(cells[0], where + " column omega"));
     G.push_back(Eigen::MatrixXcd::Constant(
         1, 1, cplx(parse_cell(cells[1], where + " column G_re"), parse_cell(cells[2], where + " column G_im"))));
@@ -292,7 +295,7 @@ FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain) 
       if (!(v > 0)) input_error(where + " column G_var", "variance " + cells[3] + " must be positive");
       var.push_back(Eigen::MatrixXd::Constant(1, 1, v));
     }
-  }
+  });
   if (omega.empty()) input_error(name, "no data rows");
   FrfData d = frf_data(domain, Eigen::Map<Eigen::VectorXd>(omega.data(), static_cast<Eigen::Index>(omega.size())), G,
                        var);
@@ -331,16 +334,9 @@ Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int
   if (inputs < 1 || outputs < 1) input_error(name + " line 1", "needs at least one u and one y column");
   const size_t cols = header.size();
   std::vector<double> values;
-  int lineno = 1;
-  while (std::getline(in, line)) {
-    ++lineno;
-    if (line.empty() || line == "\r") continue;
-    const auto cells = split_csv(line);
-    const std::string where = name + " line " + std::to_string(lineno);
-    if (cells.size() != cols)
-      input_error(where, "has " + std::to_string(cells.size()) + " fields, the header has " + std::to_string(cols));
+  for_each_csv_row(in, name, cols, [&](const std::vector<std::string>& cells, const std::string& where) {
     for (size_t c = 0; c < cols; ++c) values.push_back(parse_cell(cells[c], where + " column " + header[c]));
-  }
+  });
   const Eigen::Index rows = static_cast<Eigen::Index>(values.size() / cols);
   if (rows == 0) input_error(name, "no samples");
   return Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
