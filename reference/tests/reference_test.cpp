@@ -1,6 +1,7 @@
-// Tests of the high-precision reference (reference/): Akçay (2011) Table 1,
-// Eq. (19) against Eq. (16), interpolation (Theorem 1) on SISO and MIMO
-// systems, I/O round trips, and the step-6 failure.
+// Tests of the high-precision reference (reference/): interpolation
+// (Theorem 1) on SISO and MIMO systems, I/O round trips and the inequalities
+// of step 2. Table 1, Eq. (19) and the step-6 failure are typed tests over the
+// scalar, shared with fast/: tests/scalar_typed_test.cpp.
 //
 // Tolerances. u = std::numeric_limits<Real>::epsilon() ≈ 1e-50 is the unit
 // roundoff of the 50-digit format; each bound below is u × (a condition
@@ -15,7 +16,6 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <cstdlib>
 #include <limits>
 #include <string>
 #include <tuple>
@@ -106,102 +106,8 @@ Real pole_error(const MatrixR& A, const std::vector<Complex>& poles) {
   return worst;
 }
 
-// Unit in the last printed place of a table entry: "2.363" → 1e-3, "1.76e-1" → 1e-3.
-Real last_place(const std::string& printed) {
-  const std::size_t dot = printed.find('.');
-  const std::size_t e = printed.find_first_of("eE");
-  const int decimals = dot == std::string::npos ? 0
-                       : static_cast<int>((e == std::string::npos ? printed.size() : e) - dot - 1);
-  const int exponent = e == std::string::npos ? 0 : std::atoi(printed.c_str() + e + 1);
-  return pow(Real(10), exponent - decimals);
-}
-
-// ---------------------------------------------------------------------------
-// (1) Table 1 of the paper: σ4, σ5 of Ĝ_9 F_8 (Van Overschee's matrix, Eq. 13)
-// on noise-free data of the Section 4 system.
-
-TEST(ReferenceTable1, VanOverscheeSingularValuesMatchThePaper) {
-  struct Row {
-    int M;
-    const char* sigma4;
-    const char* sigma5;
-  };
-  const Row rows[] = {{16, "2.363", "1.76e-1"},  {32, "3.445", "2.17e-2"},
-                      {64, "3.155", "1.03e-3"},  {128, "3.146", "3.13e-6"},
-                      {256, "3.146", "2.42e-11"}, {512, "3.146", "6.53e-16"}};
-  const Model model = paper_system();
-  std::printf("   M  sigma4 (paper)  sigma4 (reference)        sigma5 (paper)  sigma5 (reference)"
-              "          sigma8 of Y (Eq. 16)\n");
-  for (const Row& row : rows) {
-    const Spectrum spectrum = sample_spectrum(model, row.M);
-    const MatrixC GF = vo_GF(spectrum, 9, 8);
-    const MatrixC Y = akcay_Y(spectrum, 9, 8);
-    // Ĝ_p F_r has the real blocks ŝ_{k+l−1} (Eq. 19); its imaginary part is
-    // rounding: N terms of size ≤ max|S|/N each, so ≤ 4·N·u·max|S| (4 covers the
-    // products z^q·S and the 1/√N factors).
-    Real max_S = 0;
-    for (const MatrixC& S : spectrum.S) max_S = std::max(max_S, max_abs(S));
-    const Real imaginary_bound = 4 * Real(2 * row.M) * u * max_S;
-    EXPECT_LE(max_abs(MatrixR(GF.imag())), imaginary_bound) << "M = " << row.M;
-    const std::vector<Real> sigma = singular_values(MatrixR(GF.real()));
-    const std::vector<Real> sigma_Y = singular_values(MatrixR(Y.real()));
-    std::printf("%4d  %-14s  %-24s  %-14s  %-26s  %s\n", row.M, row.sigma4, show(sigma[3], 15).c_str(),
-                row.sigma5, show(sigma[4], 15).c_str(), show(sigma_Y[7], 6).c_str());
-    // Akçay's 𝒴 keeps rank 2n = 8 at every M (Eq. 17: ℰ_{N,p,r} is nonsingular).
-    EXPECT_GT(sigma_Y[7], Real("1e-3")) << "M = " << row.M;
-    if (row.M <= 256) {
-      // Printed values carry 4 (σ4) or 3 (σ5) significant digits; the paper
-      // rounded except at M = 256, where σ5 = 2.4257…e-11 is printed 2.42
-      // (truncated, or rounding noise of the paper's double computation:
-      // 5.7e-14 absolute is a few ulps of σ1 ≈ 20). So: within one unit of the
-      // last printed digit.
-      EXPECT_LE(abs(sigma[3] - Real(row.sigma4)), last_place(row.sigma4))
-          << "M = " << row.M << ": sigma4 = " << show(sigma[3]) << ", paper " << row.sigma4;
-      EXPECT_LE(abs(sigma[4] - Real(row.sigma5)), last_place(row.sigma5))
-          << "M = " << row.M << ": sigma5 = " << show(sigma[4]) << ", paper " << row.sigma5;
-    } else {
-      // M = 512: the paper's 6.53e-16 is double rounding (≈ u_double·σ1). The
-      // exact σ5 decays geometrically in N (Eq. 14); in 50 digits it is
-      // resolved far below the double level.
-      EXPECT_NEAR(static_cast<double>(sigma[3]), 3.146, 0.001);
-      EXPECT_LT(sigma[4], Real("1e-18")) << "M = 512: sigma5 = " << show(sigma[4]);
-      EXPECT_GT(sigma[4], Real("1e-40")) << "M = 512: sigma5 should still be resolved above u·σ1";
-    }
-  }
-}
-
-// ---------------------------------------------------------------------------
-// (2) Eq. (19): 𝒴 of Eq. (16) is the sum of two block Hankel matrices of the
-// Fourier coefficients (Eq. 20): 𝒴_kl = ŝ_{k+l−1} + ŝ_{N−p−r+k+l−1}.
-
-void check_eq19(const Spectrum& spectrum, int p, int r) {
-  const int m = spectrum.m;
-  const int N = 2 * spectrum.M;
-  const MatrixC Y = akcay_Y(spectrum, p, r);
-  const std::vector<MatrixC> s_hat = fourier_coefficients(spectrum);
-  MatrixC hankel(p * m, r * m);
-  for (int k = 1; k <= p; ++k)
-    for (int l = 1; l <= r; ++l)
-      hankel.block((k - 1) * m, (l - 1) * m, m, m) = s_hat[k + l - 1] + s_hat[N - p - r + k + l - 1];
-  // Both sides are sums of N terms z^q·S_j/N (|z| = 1): each side is within
-  // ~(N + 4)·u·max|S| of the exact sum (N additions, a product, the two 1/√N
-  // or one 1/N factors); the difference is within 2·(N + 4)·u·max|S| ≤ 4·N·u·max|S|.
-  Real max_S = 0;
-  for (const MatrixC& S : spectrum.S) max_S = std::max(max_S, max_abs(S));
-  const Real bound = 4 * Real(N) * u * max_S;
-  const Real error = max_abs(MatrixC(Y - hankel));
-  std::printf("Eq. (19), m = %d, N = %d, p = %d, r = %d: max |Y - Hankel sum| = %s "
-              "(relative to max|Y| %s), bound 4 N u max|S| = %s\n",
-              m, N, p, r, show(error).c_str(), show(error / max_abs(Y)).c_str(), show(bound).c_str());
-  EXPECT_LE(error, bound);
-  EXPECT_LE(error, Real("1e-45") * max_abs(Y));
-}
-
-TEST(ReferenceEq19, YEqualsHankelSumOfFourierCoefficients) {
-  check_eq19(sample_spectrum(paper_system(), 32), 9, 8);
-  check_eq19(sample_spectrum(paper_system(), 16), 12, 20);  // r > p, p + r = N
-  check_eq19(sample_spectrum(mimo_system(), 16), 7, 6);
-}
+// Akçay (2011) Table 1, Eq. (19) and the step-6 failure are written once over
+// the scalar and run on this reference and on fast/: tests/scalar_typed_test.cpp.
 
 // ---------------------------------------------------------------------------
 // (3), (4) Theorem 1: on noise-free data Algorithm 1 is interpolatory.
@@ -378,41 +284,6 @@ TEST(ReferenceIo, SpectrumCsvRoundTripAndErrors) {
     std::fclose(f);
   }
   EXPECT_EQ(read_spectrum_csv(good).M, 2);
-}
-
-// ---------------------------------------------------------------------------
-// (6) Step 6 fails when the 2n-dimensional range space has no n/n split.
-//
-// Data: samples of a transfer function G(z) = 1 + 1/(z − 0.5) + 1/(z + 0.3)
-// instead of a spectrum. Its Fourier coefficients are causal, so 𝒴 has rank 2
-// with both shift eigenvalues 0.5, −0.3 inside the unit circle; asking for
-// n = 1 (2n = 2) leaves 2 stable eigenvalues where 1 is needed.
-
-TEST(ReferenceStep6, SplitFailureThrowsWithModuli) {
-  const int M = 16;
-  Spectrum data;
-  data.m = 1;
-  data.M = M;
-  for (int k = 0; k <= M; ++k) {
-    const Complex z = at(pi() * Real(k) / Real(M));
-    const Complex g = Complex(1) + Complex(1) / (z - Complex(Real("0.5"))) + Complex(1) / (z + Complex(Real("0.3")));
-    MatrixC S(1, 1);
-    S(0, 0) = g;
-    data.S.push_back(S);
-  }
-  try {
-    identify_spectrum(data, 1, 5, 4);
-    FAIL() << "step 6 did not fail";
-  } catch (const StepError& e) {
-    const std::string what = e.what();
-    std::printf("expected failure: %s\n", what.c_str());
-    EXPECT_EQ(e.step(), 6);
-    EXPECT_EQ(what.rfind("step 6:", 0), 0u) << what;
-    EXPECT_NE(what.find("2 of the 2n = 2"), std::string::npos) << what;
-    EXPECT_NE(what.find("moduli"), std::string::npos) << what;
-    EXPECT_NE(what.find("5.0000000000e-01"), std::string::npos) << what;
-    EXPECT_NE(what.find("3.0000000000e-01"), std::string::npos) << what;
-  }
 }
 
 TEST(ReferenceArguments, InequalitiesOfStep2AreChecked) {
