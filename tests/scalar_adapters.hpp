@@ -15,10 +15,12 @@
 #include <cstdlib>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <boost/math/constants/constants.hpp>
 #include <Eigen/Dense>
+#include <Eigen/LU>
 
 #include "fdsid/error.hpp"
 #include "fdsid/format.hpp"
@@ -41,6 +43,24 @@ struct StepFailure {
   bool thrown = false;
   bool split = false;
   std::string what;
+};
+
+/// What an identification returned: the model, its order and the singular
+/// values of step 3 (of 𝒴, or of Ĝ_pF_r for vo1997), largest first.
+template <class Model, class Real>
+struct Identification {
+  Model model;
+  int order = 0;
+  std::vector<Real> sigma;
+};
+
+/// Akçay (2011) Table 1 at one M: singular values of Ĝ_9F_8 and of 𝒴
+/// (p = 9, r = 8), max |Im Ĝ_9F_8| and max |S_k| of the data.
+template <class Real>
+struct Table1Sigmas {
+  std::vector<Real> vo, akcay;
+  Real vo_imaginary = 0;
+  Real max_S = 0;
 };
 
 /// fast/: double precision, FFT-based 𝒴 (Eq. 19), Eigen's double decompositions
@@ -103,11 +123,7 @@ struct FastSide {
   /// Singular values of Ĝ_9F_8 and 𝒴 (p = 9, r = 8) as `fdsid reproduce
   /// table1` computes them (fdsid/paper.hpp), and max |Im Ĝ_9F_8|: 0, since
   /// van_overschee_matrix is assembled from the real ŝ.
-  struct Table1 {
-    std::vector<Real> vo, akcay;
-    Real vo_imaginary = 0;
-    Real max_S = 0;
-  };
+  using Table1 = Table1Sigmas<Real>;
   static Table1 table1(int M) {
     const Table1Row row = reproduce_table1({M}).front();
     Table1 t;
@@ -115,6 +131,35 @@ struct FastSide {
     t.akcay.assign(row.akcay_sigmas.data(), row.akcay_sigmas.data() + row.akcay_sigmas.size());
     t.max_S = max_abs_sample(sample(paper_system(), M));
     return t;
+  }
+
+  /// Algorithm 1 (or vo1997) with order, p, r given: the model and the
+  /// singular values of step 3 (of 𝒴, or of Ĝ_pF_r for vo1997).
+  using Identified = Identification<Model, Real>;
+  static Identified identify(const Data& d, int order, int p, int r, bool van_overschee) {
+    SpectrumOptions o;
+    o.method = van_overschee ? Method::VanOverschee1997 : Method::Akcay2011;
+    o.order = order;
+    o.p = p;
+    o.r = r;
+    o.extension = extension;
+    const SpectrumResult result = identify_spectrum(d, o);
+    const Eigen::VectorXd& s = result.singular_values;
+    return {result.model, result.order, std::vector<Real>(s.data(), s.data() + s.size())};
+  }
+  /// {‖S_estimate(e^{iω}) − S_truth(e^{iω})‖_F, ‖S_truth(e^{iω})‖_F}.
+  static std::pair<Real, Real> spectrum_error(const Model& truth, const Model& estimate, const Real& omega) {
+    const Complex z = std::polar(1.0, omega);
+    const Eigen::MatrixXcd S = power_spectrum(truth, z);
+    return {(power_spectrum(estimate, z) - S).norm(), S.norm()};
+  }
+  /// Largest distance from a pole of `truth` to the nearest pole of `estimate`.
+  static Real pole_error(const Model& truth, const Model& estimate) { return testing::pole_error(truth, estimate); }
+  /// ρ(A) and ρ(A − B D⁻¹ C): the largest pole and zero moduli.
+  static Real pole_radius(const Model& model) { return fdsid::testing::eigenvalues(model.A).cwiseAbs().maxCoeff(); }
+  static Real zero_radius(const Model& model) {
+    const Eigen::MatrixXd Z = model.A - model.B * fdsid::testing::inverse(model.D) * model.C;
+    return fdsid::testing::eigenvalues(Z).cwiseAbs().maxCoeff();
   }
 
   static StepFailure identify_failure(const Data& d, int order, int p, int r) {
@@ -182,11 +227,7 @@ struct ReferenceSide {
   }
   static std::vector<Real> singular_values(const reference::MatrixR& X) { return reference::singular_values(X); }
 
-  struct Table1 {
-    std::vector<Real> vo, akcay;
-    Real vo_imaginary = 0;
-    Real max_S = 0;
-  };
+  using Table1 = Table1Sigmas<Real>;
   static Table1 table1(int M) {
     const Data d = sample(paper_system(), M);
     const Matrix GF = reference::vo_GF(d, 9, 8);
@@ -198,6 +239,37 @@ struct ReferenceSide {
     t.vo_imaginary = imaginary;
     t.max_S = max_abs_sample(d);
     return t;
+  }
+
+  using Identified = Identification<Model, Real>;
+  static Identified identify(const Data& d, int order, int p, int r, bool van_overschee) {
+    const reference::Result result = reference::identify_spectrum(d, order, p, r, van_overschee);
+    return {result.model, result.order, van_overschee ? result.singular_values_vo : result.singular_values_Y};
+  }
+  static std::pair<Real, Real> spectrum_error(const Model& truth, const Model& estimate, const Real& omega) {
+    const Complex z(cos(omega), sin(omega));
+    const reference::MatrixC S = reference::spectrum_of(truth, z);
+    return {(reference::spectrum_of(estimate, z) - S).norm(), S.norm()};
+  }
+  static Real pole_error(const Model& truth, const Model& estimate) {
+    const std::vector<Complex> a = reference::eigenvalues(truth.A), b = reference::eigenvalues(estimate.A);
+    Real worst = 0;
+    for (const Complex& lambda : a) {
+      Real nearest = -1;
+      for (const Complex& mu : b)
+        if (nearest < 0 || abs(mu - lambda) < nearest) nearest = abs(mu - lambda);
+      worst = std::max(worst, nearest);
+    }
+    return worst;
+  }
+  static Real radius(const reference::MatrixR& X) {
+    Real worst = 0;
+    for (const Complex& lambda : reference::eigenvalues(X)) worst = std::max(worst, abs(lambda));
+    return worst;
+  }
+  static Real pole_radius(const Model& model) { return radius(model.A); }
+  static Real zero_radius(const Model& model) {
+    return radius(reference::MatrixR(model.A - model.B * model.D.partialPivLu().solve(model.C)));
   }
 
   static StepFailure identify_failure(const Data& d, int order, int p, int r) {

@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "scalar_adapters.hpp"
+#include "tolerance.hpp"
 
 namespace fdsid::testing {
 namespace {
@@ -131,8 +132,9 @@ TYPED_TEST(Akcay2011Claims, Table1VanOverscheeCollapsesWhileYKeepsRankTwoN) {
       // Bound max(1e-18, floor): 1e-18 in 50 digits, the floor in double.
       EXPECT_LE(t.vo[4], std::max(Side::number("1e-18"), floor)) << "M = 512: sigma5 = " << Side::show(t.vo[4]);
       // Where the floor lies below 1e-40, σ5 is resolved: it must be above it.
-      if (floor < Side::number("1e-40"))
+      if (floor < Side::number("1e-40")) {
         EXPECT_GT(t.vo[4], Side::number("1e-40")) << "M = 512: sigma5 should still be resolved above u·σ1";
+      }
     }
   }
 }
@@ -209,6 +211,60 @@ TYPED_TEST(Akcay2011Claims, Step6SplitFailureThrowsWithModuli) {
   EXPECT_NE(what.find("moduli"), std::string::npos) << what;
   EXPECT_NE(what.find(Side::printed_modulus("0.5")), std::string::npos) << what;
   EXPECT_NE(what.find(Side::printed_modulus("0.3")), std::string::npos) << what;
+}
+
+// ---------------------------------------------------------------------------
+// Akçay (2011) Section 3, after Eq. (14): with N − p − r bounded, Van
+// Overschee's algorithm is still interpolatory (the error term of Eq. 13 is a
+// similarity). M = 16, p = 9, r = 8: σ5(Ĝ_9F_8) = 0.176 (Table 1), so the
+// range is well determined.
+//
+// Tolerance (fdsid/compare.hpp, tests/tolerance.hpp): 4 (p + r) m log2(N) u
+// σ1/σ_2n in the side's u on max_z ‖Ŝ − S‖_F / max_z ‖S‖_F over the grid
+// points and the midpoints (2.9e-46 in 50 digits; per point that is ≤ 2.9e-46 ·
+// max‖S‖/min‖S‖, printed, far below the reference's former 1e-30); for the poles the
+// same times the eigenvalue condition number of the true A (κ ≈ 5 here,
+// computed in double: a condition number needs no 50 digits).
+
+TYPED_TEST(Akcay2011Claims, VanOverscheeIsInterpolatoryWhileNMinusPMinusRIsSmall) {
+  using Side = TypeParam;
+  using Real = typename Side::Real;
+  const int M = 16, N = 2 * M, p = 9, r = 8, n = 4;
+  const typename Side::Model truth = Side::paper_system();
+  const typename Side::Identified result = Side::identify(Side::sample(truth, M), n, p, r, true);
+  ASSERT_EQ(result.order, n);
+  ASSERT_GE(result.sigma.size(), static_cast<std::size_t>(2 * n));
+  const Real ratio = result.sigma[0] / result.sigma[2 * n - 1];
+  const Real tol = 4 * Real((p + r) * 1) * Real(std::log2(N)) * Side::unit_roundoff() * ratio;
+  // max_z ‖Ŝ − S‖_F / max_z ‖S‖_F over the grid points (k even) and midpoints (k odd).
+  using std::max;
+  using std::min;
+  Real worst = 0, where = 0, max_S = 0, min_S = -1;
+  for (int k = 0; k <= 2 * M; ++k) {
+    const Real omega = Side::pi() * Real(k) / Real(2 * M);
+    const auto [e, S] = Side::spectrum_error(truth, result.model, omega);
+    if (e > worst) {
+      worst = e;
+      where = omega;
+    }
+    max_S = max(max_S, S);
+    min_S = min_S < 0 ? S : min(min_S, S);
+  }
+  worst /= max_S;
+  const Real kappa = Real(eigenvalue_condition(read_model(source_path("fixtures/systems/akcay2011.json")).A));
+  const Real poles = Side::pole_error(truth, result.model);
+  std::printf("%s, vo1997, M = %d, p = %d, r = %d: sigma1/sigma2n = %s; worst relative spectrum error %s at "
+              "omega = %s, tolerance 4 (p+r) m log2(N) u sigma1/sigma2n = %s; poles %s, tolerance kappa x that = %s\n",
+              Side::name, M, p, r, Side::show(ratio).c_str(), Side::show(worst).c_str(), Side::show(where).c_str(),
+              Side::show(tol).c_str(), Side::show(poles).c_str(), Side::show(kappa * tol).c_str());
+  // Per point the bound is tol · max‖S‖/‖S(z)‖ ≤ tol · max‖S‖/min‖S‖.
+  std::printf("  max|S|/min|S| = %s: per point <= %s\n", Side::show(max_S / min_S).c_str(),
+              Side::show(tol * max_S / min_S).c_str());
+  EXPECT_LE(worst, tol);
+  EXPECT_LE(poles, kappa * tol);
+  // Â stable and Ĝ minimum phase (Assumption 2.1 for the estimate).
+  EXPECT_LT(Side::pole_radius(result.model), Real(1));
+  EXPECT_LT(Side::zero_radius(result.model), Real(1));
 }
 
 }  // namespace

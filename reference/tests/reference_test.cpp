@@ -158,11 +158,8 @@ TEST(ReferenceInterpolation, PaperSystemAutomaticOrder) {
   check_interpolation(paper_system(), 32, 12, 10, 0, false, "Section 4 system");
 }
 
-TEST(ReferenceInterpolation, VanOverscheeIsInterpolatoryForSmallN) {
-  // Akçay (2011) Section 3: with N − p − r bounded, Van Overschee's algorithm is
-  // still interpolatory (the error term of Eq. 13 is a similarity).
-  check_interpolation(paper_system(), 16, 9, 8, 4, true, "Section 4 system, vo1997");
-}
+// Van Overschee's interpolation for small N − p − r: a typed test over the
+// scalar, tests/scalar_typed_test.cpp.
 
 TEST(ReferenceInterpolation, MinimumPhaseMimoSystem) {
   const Model truth = mimo_system();
