@@ -1,7 +1,8 @@
 // Tests of the high-precision reference (reference/): interpolation
-// (Theorem 1) on SISO and MIMO systems, I/O round trips and the inequalities
-// of step 2. Table 1, Eq. (19) and the step-6 failure are typed tests over the
-// scalar, shared with fast/: tests/scalar_typed_test.cpp.
+// (Theorem 1) on a MIMO system, I/O round trips and the inequalities of step
+// 2. Table 1, Eq. (19), the step-6 failure and interpolation of the Section 4
+// system are typed tests over the scalar, shared with fast/:
+// tests/scalar_typed_test.cpp.
 //
 // Tolerances. u = std::numeric_limits<Real>::epsilon() ≈ 1e-50 is the unit
 // roundoff of the 50-digit format; each bound below is u × (a condition
@@ -64,8 +65,6 @@ Real max_abs(const MatrixC& X) {
   for (Eigen::Index i = 0; i < X.size(); ++i) worst = std::max(worst, abs(X.data()[i]));
   return worst;
 }
-
-Real max_abs(const MatrixR& X) { return X.cwiseAbs().maxCoeff(); }
 
 Real spectral_radius(const MatrixR& X) {
   Real radius = 0;
@@ -150,16 +149,10 @@ void check_interpolation(const Model& truth, int M, int p, int r, int order, boo
       << name;
 }
 
-TEST(ReferenceInterpolation, PaperSystemGivenOrder) {
-  check_interpolation(paper_system(), 64, 20, 20, 4, false, "Section 4 system");
-}
-
-TEST(ReferenceInterpolation, PaperSystemAutomaticOrder) {
-  check_interpolation(paper_system(), 32, 12, 10, 0, false, "Section 4 system");
-}
-
-// Van Overschee's interpolation for small N − p − r: a typed test over the
-// scalar, tests/scalar_typed_test.cpp.
+// The Section 4 system with the order given and read from the data, and Van
+// Overschee's interpolation for small N − p − r: typed tests over the scalar,
+// tests/scalar_typed_test.cpp (Theorem1InterpolatesThePaperSystem,
+// VanOverscheeIsInterpolatoryWhileNMinusPMinusRIsSmall).
 
 TEST(ReferenceInterpolation, MinimumPhaseMimoSystem) {
   const Model truth = mimo_system();
