@@ -1,23 +1,18 @@
-// Tests of the high-precision reference (reference/): interpolation
-// (Theorem 1) on a MIMO system, I/O round trips and the inequalities of step
-// 2. Table 1, Eq. (19), the step-6 failure and interpolation of the Section 4
-// system are typed tests over the scalar, shared with fast/:
-// tests/scalar_typed_test.cpp.
+// Tests of the high-precision reference (reference/): I/O round trips and the
+// inequalities of step 2. Table 1, Eq. (19), interpolation (Theorem 1, SISO and
+// MIMO) and the step-6 failure are typed tests over the scalar, shared with
+// fast/: tests/scalar_typed_test.cpp.
 //
-// Tolerances. u = std::numeric_limits<Real>::epsilon() ≈ 1e-50 is the unit
-// roundoff of the 50-digit format; each bound below is u × (a condition
-// number) × (a small constant), derived where it is used, and every test
-// prints the worst error it saw beside its bound.
+// Tolerances: the I/O bounds follow from the 40 significant digits written,
+// derived where they are used.
 #include "fdsid/reference/io.hpp"
 #include "fdsid/reference/spectrum_id.hpp"
 #include "test_support.hpp"
 
 #include <boost/math/constants/constants.hpp>
-#include <Eigen/LU>
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <limits>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -27,8 +22,6 @@ namespace {
 using namespace fdsid::reference;
 
 using test::mat;
-
-const Real u = std::numeric_limits<Real>::epsilon();
 
 // Akçay (2011) Section 4 (McKelvey, Akçay & Ljung 1996), entries as printed.
 Model paper_system() {
@@ -43,8 +36,8 @@ Model paper_system() {
   return model;
 }
 
-// A 2x2, third-order system: poles 0.6 ± 0.3i and -0.5 (distinct, nonzero,
-// stable); MinimumPhaseMimoSystem checks it satisfies Assumption 2.1.
+// A 2x2, third-order system: poles 0.6 ± 0.3i and -0.5 (the same system as
+// mimo_system in tests/scalar_typed_test.cpp, which checks Assumption 2.1).
 Model mimo_system() {
   Model model;
   model.A = mat({{"0.6", "0.3", "0"}, {"-0.3", "0.6", "0.2"}, {"0", "0", "-0.5"}});
@@ -54,119 +47,15 @@ Model mimo_system() {
   return model;
 }
 
-std::string show(const Real& x, int digits = 6) { return test::sci(x, digits); }
-
-Complex at(const Real& omega) { return Complex(cos(omega), sin(omega)); }
-
-Real pi() { return boost::math::constants::pi<Real>(); }
-
 Real max_abs(const MatrixC& X) {
   Real worst = 0;
   for (Eigen::Index i = 0; i < X.size(); ++i) worst = std::max(worst, abs(X.data()[i]));
   return worst;
 }
 
-Real spectral_radius(const MatrixR& X) {
-  Real radius = 0;
-  for (const Complex& lambda : eigenvalues(X)) radius = std::max(radius, abs(lambda));
-  return radius;
-}
-
-// Worst relative error ‖Ŝ(e^{iω}) − S(e^{iω})‖_F / ‖S(e^{iω})‖_F over the grid
-// ω = π(k−1)/M (on_grid) or the midpoints ω = π(k−½)/M.
-struct SpectrumError {
-  Real worst = 0;
-  Real omega = 0;
-};
-
-SpectrumError spectrum_error(const Model& truth, const Model& estimate, int M, bool on_grid) {
-  SpectrumError e;
-  for (int k = 1; k <= (on_grid ? M + 1 : M); ++k) {
-    const Real omega = pi() * (on_grid ? Real(k - 1) : Real(k) - Real("0.5")) / Real(M);
-    const MatrixC S = spectrum_of(truth, at(omega));
-    const Real error = (spectrum_of(estimate, at(omega)) - S).norm() / S.norm();
-    if (error > e.worst) {
-      e.worst = error;
-      e.omega = omega;
-    }
-  }
-  return e;
-}
-
-// Largest distance from an eigenvalue of A to the nearest identified pole.
-Real pole_error(const MatrixR& A, const std::vector<Complex>& poles) {
-  Real worst = 0;
-  for (const Complex& lambda : eigenvalues(A)) {
-    Real nearest = -1;
-    for (const Complex& pole : poles)
-      if (nearest < 0 || abs(pole - lambda) < nearest) nearest = abs(pole - lambda);
-    worst = std::max(worst, nearest);
-  }
-  return worst;
-}
-
-// Akçay (2011) Table 1, Eq. (19) and the step-6 failure are written once over
-// the scalar and run on this reference and on fast/: tests/scalar_typed_test.cpp.
-
-// ---------------------------------------------------------------------------
-// (3), (4) Theorem 1: on noise-free data Algorithm 1 is interpolatory.
-//
-// Tolerance 1e-30 for spectra and poles: the errors are u ≈ 1e-50 amplified by
-// the conditioning of the range space (σ1/σ_2n of 𝒴, ≤ 1e4 here), of the
-// eigenvectors of Ã (≤ 1e3) and of the Riccati equation (1/(1 − ρ²) with ρ the
-// largest zero modulus, ≤ 1e2), times a constant ≤ 1e3 for the dimensions:
-// ≤ 1e-50 · 1e12 · 1e3 = 1e-35; the 1e-30 required leaves a factor 1e5.
-
-void check_interpolation(const Model& truth, int M, int p, int r, int order, bool van_overschee,
-                         const char* name) {
-  const Spectrum spectrum = sample_spectrum(truth, M);
-  const Result result = identify_spectrum(spectrum, order, p, r, van_overschee);
-  const int n = static_cast<int>(truth.A.rows());
-  ASSERT_EQ(result.order, n) << name;
-  const SpectrumError on = spectrum_error(truth, result.model, M, true);
-  const SpectrumError between = spectrum_error(truth, result.model, M, false);
-  const Real poles = pole_error(truth.A, result.poles);
-  const std::vector<Real>& sigma = van_overschee ? result.singular_values_vo : result.singular_values_Y;
-  const std::string gap = static_cast<int>(sigma.size()) > 2 * n
-                              ? show(sigma[2 * n - 1] / sigma[2 * n])
-                              : std::string("(no sigma_2n+1: 2n = min(pm, rm))");
-  std::printf("%s: M = %d, p = %d, r = %d, n = %d%s: sigma_2n/sigma_2n+1 = %s, "
-              "sigma_1/sigma_2n = %s, Riccati iterations %d\n"
-              "  worst spectrum error on grid %s (omega = %s), between grid %s (omega = %s), "
-              "poles %s; bound 1e-30\n",
-              name, M, p, r, n, order == 0 ? " (auto)" : "", gap.c_str(),
-              show(sigma[0] / sigma[2 * n - 1]).c_str(), result.riccati_iterations,
-              show(on.worst).c_str(), show(on.omega, 4).c_str(), show(between.worst).c_str(),
-              show(between.omega, 4).c_str(), show(poles).c_str());
-  EXPECT_LE(on.worst, Real("1e-30")) << name;
-  EXPECT_LE(between.worst, Real("1e-30")) << name;
-  EXPECT_LE(poles, Real("1e-30")) << name;
-  // The model is real by construction; Â stable and Ĝ minimum phase
-  // (Assumption 2.1 for the estimate), D̂ symmetric positive definite.
-  EXPECT_LT(spectral_radius(result.model.A), Real(1)) << name;
-  const MatrixR D_inv = result.model.D.inverse();
-  EXPECT_LT(spectral_radius(MatrixR(result.model.A - result.model.B * D_inv * result.model.C)), Real(1))
-      << name;
-}
-
-// The Section 4 system with the order given and read from the data, and Van
-// Overschee's interpolation for small N − p − r: typed tests over the scalar,
-// tests/scalar_typed_test.cpp (Theorem1InterpolatesThePaperSystem,
-// VanOverscheeIsInterpolatoryWhileNMinusPMinusRIsSmall).
-
-TEST(ReferenceInterpolation, MinimumPhaseMimoSystem) {
-  const Model truth = mimo_system();
-  // Premises (Assumption 2.1): stable, minimum phase, minimal, distinct nonzero poles.
-  EXPECT_LT(spectral_radius(truth.A), Real(1));
-  EXPECT_LT(spectral_radius(MatrixR(truth.A - truth.B * truth.D.inverse() * truth.C)), Real(1));
-  MatrixR controllability(3, 6), observability(6, 3);
-  controllability << truth.B, truth.A * truth.B, truth.A * truth.A * truth.B;
-  observability << truth.C, truth.C * truth.A, truth.C * truth.A * truth.A;
-  EXPECT_GT(singular_values(controllability)[2], Real("1e-3"));
-  EXPECT_GT(singular_values(observability)[2], Real("1e-3"));
-  check_interpolation(truth, 32, 10, 10, 3, false, "2x2 MIMO system");
-  check_interpolation(truth, 32, 10, 10, 0, false, "2x2 MIMO system");
-}
+// Theorem 1 (interpolation) on the Section 4 system, on the 2x2 system above
+// and for Van Overschee's algorithm with small N − p − r: typed tests over the
+// scalar, tests/scalar_typed_test.cpp.
 
 // ---------------------------------------------------------------------------
 // (5) I/O keeps the precision.
