@@ -178,21 +178,8 @@ TEST(Akcay2011, ExtensionReadingsDifferOnComplexNoise) {
   EXPECT_GT(std::abs(b(0, 5) - b(0, 128 - 5)), 1e-6);
 }
 
-TEST(VanOverschee1997, IsInterpolatoryWhileNMinusPMinusRIsSmall) {
-  // Akçay (2011) after Eq. (14): with N - p - r bounded the vo1997 algorithm
-  // still interpolates. M = 16, p = 9, r = 8: σ5(Ĝ_9F_8) = 0.176 (Table 1), so
-  // the range is well determined; tolerance as in tolerance.hpp with the
-  // singular-value ratio of Ĝ_pF_r.
-  SpectrumOptions o;
-  o.method = Method::VanOverschee1997;
-  o.order = 4;
-  o.p = 9;
-  o.r = 8;
-  const StateSpace sys = akcay_example_system();
-  const SpectrumResult r = identify_spectrum(noise_free(sys, 16), o);
-  const double tol = spectrum_tolerance(9, 8, 1, 32, r.singular_values(0) / r.singular_values(7));
-  EXPECT_LE(relative_spectrum_error(sys, r.model, 16), tol);
-}
+// VanOverschee1997's interpolation while N − p − r is small: a typed test over
+// the scalar, tests/scalar_typed_test.cpp.
 
 TEST(VanOverschee1997, LosesTheAntiCausalHalfAsNGrows) {
   // Eq. (14): at M = 512 σ5..σ8 of Ĝ_9F_8 are at rounding level (Table 1), so

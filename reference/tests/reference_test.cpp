@@ -1,22 +1,18 @@
-// Tests of the high-precision reference (reference/): Akçay (2011) Table 1,
-// Eq. (19) against Eq. (16), interpolation (Theorem 1) on SISO and MIMO
-// systems, I/O round trips, and the step-6 failure.
+// Tests of the high-precision reference (reference/): I/O round trips and the
+// inequalities of step 2. Table 1, Eq. (19), interpolation (Theorem 1, SISO and
+// MIMO) and the step-6 failure are typed tests over the scalar, shared with
+// fast/: tests/scalar_typed_test.cpp.
 //
-// Tolerances. u = std::numeric_limits<Real>::epsilon() ≈ 1e-50 is the unit
-// roundoff of the 50-digit format; each bound below is u × (a condition
-// number) × (a small constant), derived where it is used, and every test
-// prints the worst error it saw beside its bound.
+// Tolerances: the I/O bounds follow from the 40 significant digits written,
+// derived where they are used.
 #include "fdsid/reference/io.hpp"
 #include "fdsid/reference/spectrum_id.hpp"
 #include "test_support.hpp"
 
 #include <boost/math/constants/constants.hpp>
-#include <Eigen/LU>
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <cstdlib>
-#include <limits>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -26,8 +22,6 @@ namespace {
 using namespace fdsid::reference;
 
 using test::mat;
-
-const Real u = std::numeric_limits<Real>::epsilon();
 
 // Akçay (2011) Section 4 (McKelvey, Akçay & Ljung 1996), entries as printed.
 Model paper_system() {
@@ -42,8 +36,8 @@ Model paper_system() {
   return model;
 }
 
-// A 2x2, third-order system: poles 0.6 ± 0.3i and -0.5 (distinct, nonzero,
-// stable); MinimumPhaseMimoSystem checks it satisfies Assumption 2.1.
+// A 2x2, third-order system: poles 0.6 ± 0.3i and -0.5 (the same system as
+// mimo_system in tests/scalar_typed_test.cpp, which checks Assumption 2.1).
 Model mimo_system() {
   Model model;
   model.A = mat({{"0.6", "0.3", "0"}, {"-0.3", "0.6", "0.2"}, {"0", "0", "-0.5"}});
@@ -53,224 +47,15 @@ Model mimo_system() {
   return model;
 }
 
-std::string show(const Real& x, int digits = 6) { return test::sci(x, digits); }
-
-Complex at(const Real& omega) { return Complex(cos(omega), sin(omega)); }
-
-Real pi() { return boost::math::constants::pi<Real>(); }
-
 Real max_abs(const MatrixC& X) {
   Real worst = 0;
   for (Eigen::Index i = 0; i < X.size(); ++i) worst = std::max(worst, abs(X.data()[i]));
   return worst;
 }
 
-Real max_abs(const MatrixR& X) { return X.cwiseAbs().maxCoeff(); }
-
-Real spectral_radius(const MatrixR& X) {
-  Real radius = 0;
-  for (const Complex& lambda : eigenvalues(X)) radius = std::max(radius, abs(lambda));
-  return radius;
-}
-
-// Worst relative error ‖Ŝ(e^{iω}) − S(e^{iω})‖_F / ‖S(e^{iω})‖_F over the grid
-// ω = π(k−1)/M (on_grid) or the midpoints ω = π(k−½)/M.
-struct SpectrumError {
-  Real worst = 0;
-  Real omega = 0;
-};
-
-SpectrumError spectrum_error(const Model& truth, const Model& estimate, int M, bool on_grid) {
-  SpectrumError e;
-  for (int k = 1; k <= (on_grid ? M + 1 : M); ++k) {
-    const Real omega = pi() * (on_grid ? Real(k - 1) : Real(k) - Real("0.5")) / Real(M);
-    const MatrixC S = spectrum_of(truth, at(omega));
-    const Real error = (spectrum_of(estimate, at(omega)) - S).norm() / S.norm();
-    if (error > e.worst) {
-      e.worst = error;
-      e.omega = omega;
-    }
-  }
-  return e;
-}
-
-// Largest distance from an eigenvalue of A to the nearest identified pole.
-Real pole_error(const MatrixR& A, const std::vector<Complex>& poles) {
-  Real worst = 0;
-  for (const Complex& lambda : eigenvalues(A)) {
-    Real nearest = -1;
-    for (const Complex& pole : poles)
-      if (nearest < 0 || abs(pole - lambda) < nearest) nearest = abs(pole - lambda);
-    worst = std::max(worst, nearest);
-  }
-  return worst;
-}
-
-// Unit in the last printed place of a table entry: "2.363" → 1e-3, "1.76e-1" → 1e-3.
-Real last_place(const std::string& printed) {
-  const std::size_t dot = printed.find('.');
-  const std::size_t e = printed.find_first_of("eE");
-  const int decimals = dot == std::string::npos ? 0
-                       : static_cast<int>((e == std::string::npos ? printed.size() : e) - dot - 1);
-  const int exponent = e == std::string::npos ? 0 : std::atoi(printed.c_str() + e + 1);
-  return pow(Real(10), exponent - decimals);
-}
-
-// ---------------------------------------------------------------------------
-// (1) Table 1 of the paper: σ4, σ5 of Ĝ_9 F_8 (Van Overschee's matrix, Eq. 13)
-// on noise-free data of the Section 4 system.
-
-TEST(ReferenceTable1, VanOverscheeSingularValuesMatchThePaper) {
-  struct Row {
-    int M;
-    const char* sigma4;
-    const char* sigma5;
-  };
-  const Row rows[] = {{16, "2.363", "1.76e-1"},  {32, "3.445", "2.17e-2"},
-                      {64, "3.155", "1.03e-3"},  {128, "3.146", "3.13e-6"},
-                      {256, "3.146", "2.42e-11"}, {512, "3.146", "6.53e-16"}};
-  const Model model = paper_system();
-  std::printf("   M  sigma4 (paper)  sigma4 (reference)        sigma5 (paper)  sigma5 (reference)"
-              "          sigma8 of Y (Eq. 16)\n");
-  for (const Row& row : rows) {
-    const Spectrum spectrum = sample_spectrum(model, row.M);
-    const MatrixC GF = vo_GF(spectrum, 9, 8);
-    const MatrixC Y = akcay_Y(spectrum, 9, 8);
-    // Ĝ_p F_r has the real blocks ŝ_{k+l−1} (Eq. 19); its imaginary part is
-    // rounding: N terms of size ≤ max|S|/N each, so ≤ 4·N·u·max|S| (4 covers the
-    // products z^q·S and the 1/√N factors).
-    Real max_S = 0;
-    for (const MatrixC& S : spectrum.S) max_S = std::max(max_S, max_abs(S));
-    const Real imaginary_bound = 4 * Real(2 * row.M) * u * max_S;
-    EXPECT_LE(max_abs(MatrixR(GF.imag())), imaginary_bound) << "M = " << row.M;
-    const std::vector<Real> sigma = singular_values(MatrixR(GF.real()));
-    const std::vector<Real> sigma_Y = singular_values(MatrixR(Y.real()));
-    std::printf("%4d  %-14s  %-24s  %-14s  %-26s  %s\n", row.M, row.sigma4, show(sigma[3], 15).c_str(),
-                row.sigma5, show(sigma[4], 15).c_str(), show(sigma_Y[7], 6).c_str());
-    // Akçay's 𝒴 keeps rank 2n = 8 at every M (Eq. 17: ℰ_{N,p,r} is nonsingular).
-    EXPECT_GT(sigma_Y[7], Real("1e-3")) << "M = " << row.M;
-    if (row.M <= 256) {
-      // Printed values carry 4 (σ4) or 3 (σ5) significant digits; the paper
-      // rounded except at M = 256, where σ5 = 2.4257…e-11 is printed 2.42
-      // (truncated, or rounding noise of the paper's double computation:
-      // 5.7e-14 absolute is a few ulps of σ1 ≈ 20). So: within one unit of the
-      // last printed digit.
-      EXPECT_LE(abs(sigma[3] - Real(row.sigma4)), last_place(row.sigma4))
-          << "M = " << row.M << ": sigma4 = " << show(sigma[3]) << ", paper " << row.sigma4;
-      EXPECT_LE(abs(sigma[4] - Real(row.sigma5)), last_place(row.sigma5))
-          << "M = " << row.M << ": sigma5 = " << show(sigma[4]) << ", paper " << row.sigma5;
-    } else {
-      // M = 512: the paper's 6.53e-16 is double rounding (≈ u_double·σ1). The
-      // exact σ5 decays geometrically in N (Eq. 14); in 50 digits it is
-      // resolved far below the double level.
-      EXPECT_NEAR(static_cast<double>(sigma[3]), 3.146, 0.001);
-      EXPECT_LT(sigma[4], Real("1e-18")) << "M = 512: sigma5 = " << show(sigma[4]);
-      EXPECT_GT(sigma[4], Real("1e-40")) << "M = 512: sigma5 should still be resolved above u·σ1";
-    }
-  }
-}
-
-// ---------------------------------------------------------------------------
-// (2) Eq. (19): 𝒴 of Eq. (16) is the sum of two block Hankel matrices of the
-// Fourier coefficients (Eq. 20): 𝒴_kl = ŝ_{k+l−1} + ŝ_{N−p−r+k+l−1}.
-
-void check_eq19(const Spectrum& spectrum, int p, int r) {
-  const int m = spectrum.m;
-  const int N = 2 * spectrum.M;
-  const MatrixC Y = akcay_Y(spectrum, p, r);
-  const std::vector<MatrixC> s_hat = fourier_coefficients(spectrum);
-  MatrixC hankel(p * m, r * m);
-  for (int k = 1; k <= p; ++k)
-    for (int l = 1; l <= r; ++l)
-      hankel.block((k - 1) * m, (l - 1) * m, m, m) = s_hat[k + l - 1] + s_hat[N - p - r + k + l - 1];
-  // Both sides are sums of N terms z^q·S_j/N (|z| = 1): each side is within
-  // ~(N + 4)·u·max|S| of the exact sum (N additions, a product, the two 1/√N
-  // or one 1/N factors); the difference is within 2·(N + 4)·u·max|S| ≤ 4·N·u·max|S|.
-  Real max_S = 0;
-  for (const MatrixC& S : spectrum.S) max_S = std::max(max_S, max_abs(S));
-  const Real bound = 4 * Real(N) * u * max_S;
-  const Real error = max_abs(MatrixC(Y - hankel));
-  std::printf("Eq. (19), m = %d, N = %d, p = %d, r = %d: max |Y - Hankel sum| = %s "
-              "(relative to max|Y| %s), bound 4 N u max|S| = %s\n",
-              m, N, p, r, show(error).c_str(), show(error / max_abs(Y)).c_str(), show(bound).c_str());
-  EXPECT_LE(error, bound);
-  EXPECT_LE(error, Real("1e-45") * max_abs(Y));
-}
-
-TEST(ReferenceEq19, YEqualsHankelSumOfFourierCoefficients) {
-  check_eq19(sample_spectrum(paper_system(), 32), 9, 8);
-  check_eq19(sample_spectrum(paper_system(), 16), 12, 20);  // r > p, p + r = N
-  check_eq19(sample_spectrum(mimo_system(), 16), 7, 6);
-}
-
-// ---------------------------------------------------------------------------
-// (3), (4) Theorem 1: on noise-free data Algorithm 1 is interpolatory.
-//
-// Tolerance 1e-30 for spectra and poles: the errors are u ≈ 1e-50 amplified by
-// the conditioning of the range space (σ1/σ_2n of 𝒴, ≤ 1e4 here), of the
-// eigenvectors of Ã (≤ 1e3) and of the Riccati equation (1/(1 − ρ²) with ρ the
-// largest zero modulus, ≤ 1e2), times a constant ≤ 1e3 for the dimensions:
-// ≤ 1e-50 · 1e12 · 1e3 = 1e-35; the 1e-30 required leaves a factor 1e5.
-
-void check_interpolation(const Model& truth, int M, int p, int r, int order, bool van_overschee,
-                         const char* name) {
-  const Spectrum spectrum = sample_spectrum(truth, M);
-  const Result result = identify_spectrum(spectrum, order, p, r, van_overschee);
-  const int n = static_cast<int>(truth.A.rows());
-  ASSERT_EQ(result.order, n) << name;
-  const SpectrumError on = spectrum_error(truth, result.model, M, true);
-  const SpectrumError between = spectrum_error(truth, result.model, M, false);
-  const Real poles = pole_error(truth.A, result.poles);
-  const std::vector<Real>& sigma = van_overschee ? result.singular_values_vo : result.singular_values_Y;
-  const std::string gap = static_cast<int>(sigma.size()) > 2 * n
-                              ? show(sigma[2 * n - 1] / sigma[2 * n])
-                              : std::string("(no sigma_2n+1: 2n = min(pm, rm))");
-  std::printf("%s: M = %d, p = %d, r = %d, n = %d%s: sigma_2n/sigma_2n+1 = %s, "
-              "sigma_1/sigma_2n = %s, Riccati iterations %d\n"
-              "  worst spectrum error on grid %s (omega = %s), between grid %s (omega = %s), "
-              "poles %s; bound 1e-30\n",
-              name, M, p, r, n, order == 0 ? " (auto)" : "", gap.c_str(),
-              show(sigma[0] / sigma[2 * n - 1]).c_str(), result.riccati_iterations,
-              show(on.worst).c_str(), show(on.omega, 4).c_str(), show(between.worst).c_str(),
-              show(between.omega, 4).c_str(), show(poles).c_str());
-  EXPECT_LE(on.worst, Real("1e-30")) << name;
-  EXPECT_LE(between.worst, Real("1e-30")) << name;
-  EXPECT_LE(poles, Real("1e-30")) << name;
-  // The model is real by construction; Â stable and Ĝ minimum phase
-  // (Assumption 2.1 for the estimate), D̂ symmetric positive definite.
-  EXPECT_LT(spectral_radius(result.model.A), Real(1)) << name;
-  const MatrixR D_inv = result.model.D.inverse();
-  EXPECT_LT(spectral_radius(MatrixR(result.model.A - result.model.B * D_inv * result.model.C)), Real(1))
-      << name;
-}
-
-TEST(ReferenceInterpolation, PaperSystemGivenOrder) {
-  check_interpolation(paper_system(), 64, 20, 20, 4, false, "Section 4 system");
-}
-
-TEST(ReferenceInterpolation, PaperSystemAutomaticOrder) {
-  check_interpolation(paper_system(), 32, 12, 10, 0, false, "Section 4 system");
-}
-
-TEST(ReferenceInterpolation, VanOverscheeIsInterpolatoryForSmallN) {
-  // Akçay (2011) Section 3: with N − p − r bounded, Van Overschee's algorithm is
-  // still interpolatory (the error term of Eq. 13 is a similarity).
-  check_interpolation(paper_system(), 16, 9, 8, 4, true, "Section 4 system, vo1997");
-}
-
-TEST(ReferenceInterpolation, MinimumPhaseMimoSystem) {
-  const Model truth = mimo_system();
-  // Premises (Assumption 2.1): stable, minimum phase, minimal, distinct nonzero poles.
-  EXPECT_LT(spectral_radius(truth.A), Real(1));
-  EXPECT_LT(spectral_radius(MatrixR(truth.A - truth.B * truth.D.inverse() * truth.C)), Real(1));
-  MatrixR controllability(3, 6), observability(6, 3);
-  controllability << truth.B, truth.A * truth.B, truth.A * truth.A * truth.B;
-  observability << truth.C, truth.C * truth.A, truth.C * truth.A * truth.A;
-  EXPECT_GT(singular_values(controllability)[2], Real("1e-3"));
-  EXPECT_GT(singular_values(observability)[2], Real("1e-3"));
-  check_interpolation(truth, 32, 10, 10, 3, false, "2x2 MIMO system");
-  check_interpolation(truth, 32, 10, 10, 0, false, "2x2 MIMO system");
-}
+// Theorem 1 (interpolation) on the Section 4 system, on the 2x2 system above
+// and for Van Overschee's algorithm with small N − p − r: typed tests over the
+// scalar, tests/scalar_typed_test.cpp.
 
 // ---------------------------------------------------------------------------
 // (5) I/O keeps the precision.
@@ -378,41 +163,6 @@ TEST(ReferenceIo, SpectrumCsvRoundTripAndErrors) {
     std::fclose(f);
   }
   EXPECT_EQ(read_spectrum_csv(good).M, 2);
-}
-
-// ---------------------------------------------------------------------------
-// (6) Step 6 fails when the 2n-dimensional range space has no n/n split.
-//
-// Data: samples of a transfer function G(z) = 1 + 1/(z − 0.5) + 1/(z + 0.3)
-// instead of a spectrum. Its Fourier coefficients are causal, so 𝒴 has rank 2
-// with both shift eigenvalues 0.5, −0.3 inside the unit circle; asking for
-// n = 1 (2n = 2) leaves 2 stable eigenvalues where 1 is needed.
-
-TEST(ReferenceStep6, SplitFailureThrowsWithModuli) {
-  const int M = 16;
-  Spectrum data;
-  data.m = 1;
-  data.M = M;
-  for (int k = 0; k <= M; ++k) {
-    const Complex z = at(pi() * Real(k) / Real(M));
-    const Complex g = Complex(1) + Complex(1) / (z - Complex(Real("0.5"))) + Complex(1) / (z + Complex(Real("0.3")));
-    MatrixC S(1, 1);
-    S(0, 0) = g;
-    data.S.push_back(S);
-  }
-  try {
-    identify_spectrum(data, 1, 5, 4);
-    FAIL() << "step 6 did not fail";
-  } catch (const StepError& e) {
-    const std::string what = e.what();
-    std::printf("expected failure: %s\n", what.c_str());
-    EXPECT_EQ(e.step(), 6);
-    EXPECT_EQ(what.rfind("step 6:", 0), 0u) << what;
-    EXPECT_NE(what.find("2 of the 2n = 2"), std::string::npos) << what;
-    EXPECT_NE(what.find("moduli"), std::string::npos) << what;
-    EXPECT_NE(what.find("5.0000000000e-01"), std::string::npos) << what;
-    EXPECT_NE(what.find("3.0000000000e-01"), std::string::npos) << what;
-  }
 }
 
 TEST(ReferenceArguments, InequalitiesOfStep2AreChecked) {
