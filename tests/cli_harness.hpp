@@ -104,13 +104,20 @@ inline RunResult run_command(const std::string& exe, const std::vector<std::stri
   return res;
 }
 
-inline RunResult run_fdsid(const std::vector<std::string>& args, int timeout_s = 120) {
+/// The default hang guard of one fdsid run: 600 s. A guard, not a timing test
+/// (timings live in bench/): it must sit well above the slowest legitimate run
+/// in the slowest build. Under ASan + UBSan + coverage at -O1 the 50-digit
+/// oracle of `check` on M = 64 and `gap-validate` on 20 cases take 100-150 s
+/// on 2 busy cores (Release: 1-5 s), so 120 s tripped on correct runs.
+constexpr int kHangGuardSeconds = 600;
+
+inline RunResult run_fdsid(const std::vector<std::string>& args, int timeout_s = kHangGuardSeconds) {
   return run_command(kExe, args, timeout_s);
 }
 
 /// Runs fdsid on a pseudo-terminal through util-linux `script` (stdout and
 /// stderr both arrive in `out`), for what fdsid prints on a terminal only.
-inline RunResult run_fdsid_via_script(const std::vector<std::string>& args, int timeout_s = 120) {
+inline RunResult run_fdsid_via_script(const std::vector<std::string>& args, int timeout_s = kHangGuardSeconds) {
   std::string line = kExe;
   for (const auto& a : args) line += " '" + a + "'";
   return run_command("/usr/bin/script", {"-qec", line, "/dev/null"}, timeout_s);
