@@ -110,21 +110,11 @@ int check(const std::string& json_path, const std::string& model_path, const std
 
   // Default tolerance: what a correct double-precision implementation reaches on
   // these data (compare.hpp), with sigma1/sigma_2n from the reference's singular
-  // values; the poles and Markov parameters get the eigenvalue condition number of A on top.
+  // values; poles, Markov parameters and the factor get condition numbers on top (workflow.hpp).
   const int n = res.order;
   const json& sv = k.reference_model["singular_values"];
-  set_oracle_tolerances(k, ref.A, m, 2 * M, to_double(sv[0]) / to_double(sv[2 * n - 1]), tolerance);
-  const ModelComparison& c = k.comparison;
-  if (json_path != "-") {
-    char line[256];
-    std::snprintf(line, sizeof line,
-                  "%s: poles %.3e (tol %.1e), spectrum %.3e at omega = %.4f (tol %.1e), Markov R(%d) %.3e (tol %.1e)\n",
-                  k.agree() ? "AGREES" : "DISAGREES", c.pole_distance, k.pole_tolerance, c.spectrum_error,
-                  c.spectrum_error_omega, k.spectrum_tolerance, c.markov_error_k, c.markov_error, k.pole_tolerance);
-    std::cout << (k.orders_agree() ? "" : "orders differ: candidate " + std::to_string(c.candidate_order) +
-                                              ", reference " + std::to_string(c.reference_order) + "\n")
-              << line;
-  }
+  set_oracle_tolerances(k, ref, m, 2 * M, to_double(sv[0]) / to_double(sv[2 * n - 1]), tolerance);
+  if (json_path != "-") std::cout << k.summary();
   if (!json_path.empty()) write_text_file(json_path, to_json(k).dump(2) + "\n");
   return k.agree() ? 0 : 1;
 }

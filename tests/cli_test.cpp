@@ -643,6 +643,36 @@ TEST_F(Cli, CheckRejectsAPoleMovedByOneTenThousandth) {
   EXPECT_NEAR(j.at("pole_distance").get<double>(), 1e-4, 1e-6);  // the pair moved by exactly 1e-4
 }
 
+// The classic mistake of step 9 (the anti-stabilising Riccati root): a factor
+// with the spectrum's zero 0.5 reflected to 2. Poles 0.6 ± 0.5j; the
+// minimum-phase factor is (z - 0.5)(z - 0.3)/(z^2 - 1.2 z + 0.61), the wrong one
+// (1 - 0.5 z)(z - 0.3)/(z^2 - 1.2 z + 0.61): the same |G| on the unit circle,
+// so poles, spectrum and summands agree and only the factor check sees it.
+TEST_F(Cli, CheckNamesAFactorWithAZeroOutsideTheUnitCircle) {
+  const std::string head = R"({"domain":"discrete","sample_time":1,"A":[[1.2,-0.61],[1,0]],"B":[[1],[0]],)";
+  const std::string good = write("mp.json", head + R"("C":[[0.4,-0.46]],"D":[[1]]})");
+  const std::string wrong = write("reflected.json", head + R"("C":[[0.55,0.005]],"D":[[-0.5]]})");
+  const std::string data = path("mp.csv");
+  ASSERT_TRUE(Succeeded(run_fdsid({"sample-spectrum", "--model", good, "--M", "32", "--precision", "high", "--out", data})));
+  const RunResult ok = run_fdsid({"check", "--model", good, "--data", data});
+  EXPECT_EQ(ok.status, 0) << describe(ok);
+  const RunResult r = run_fdsid({"check", "--model", wrong, "--data", data});
+  EXPECT_EQ(r.status, 1) << describe(r);
+  EXPECT_NE(r.out.find("factor: zero 2 outside the unit circle; the minimum-phase factor has it at 0.5\n"),
+            std::string::npos) << describe(r);
+  const RunResult j = run_fdsid({"check", "--model", wrong, "--data", data, "--json", "-"});
+  const json k = json::parse(j.out);
+  EXPECT_FALSE(k.at("agree").get<bool>());
+  EXPECT_FALSE(k.at("factor").at("agree").get<bool>());
+  EXPECT_FALSE(k.at("factor").at("minimum_phase").get<bool>());
+  // What S alone shows agrees: the mistake is in the factor only.
+  EXPECT_LE(k.at("pole_distance").get<double>(), k.at("tolerance").at("poles_and_markov").get<double>());
+  EXPECT_LE(k.at("spectrum_error").get<double>(), k.at("tolerance").at("spectrum").get<double>());
+  // |2 - 0.5|: the reference's factor rounded to double, zeros by QZ in double
+  // (2 x 2, O(1) entries, condition below 10): ~10 u each; 1e-12 leaves 100x.
+  EXPECT_NEAR(k.at("factor").at("zero_distance").get<double>(), 1.5, 1e-12);
+}
+
 TEST_F(Cli, CheckRefusesBadCandidates) {
   const std::string data = good_spectrum(32);
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", path("none.json"), "--data", data}), {"none.json"}));

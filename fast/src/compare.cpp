@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
+#include <utility>
 
 #include "fdsid/error.hpp"
 
@@ -20,6 +22,56 @@ double directed_distance(const Eigen::VectorXcd& from, const Eigen::VectorXcd& t
     worst = std::max(worst, to.size() ? (to.array() - from(i)).abs().minCoeff() : std::numeric_limits<double>::infinity());
   return worst;
 }
+
+double hausdorff(const Eigen::VectorXcd& a, const Eigen::VectorXcd& b) {
+  if (a.size() == 0 && b.size() == 0) return 0;
+  return std::max(directed_distance(a, b), directed_distance(b, a));
+}
+
+// Relative Markov distance max_k ||X_c(k) - X_r(k)|| / max_k ||X_r(k)||, with
+// X(0) = first and X(k) = left * A^{k-1} * right for k = 1..K.
+struct MarkovSide {
+  Eigen::MatrixXd first, left, A, right;
+};
+std::pair<double, int> markov_distance(const MarkovSide& c, const MarkovSide& r, int K) {
+  Eigen::MatrixXd Lc = c.left, Lr = r.left;
+  double scale = r.first.norm(), worst = (c.first - r.first).norm();
+  int worst_k = 0;
+  for (int k = 1; k <= K; ++k) {
+    const Eigen::MatrixXd Xr = Lr * r.right;
+    scale = std::max(scale, Xr.norm());
+    const double e = (Lc * c.right - Xr).norm();
+    if (e > worst) {
+      worst = e;
+      worst_k = k;
+    }
+    Lc = (Lc * c.A).eval();
+    Lr = (Lr * r.A).eval();
+  }
+  return {scale > 0 ? worst / scale : worst, worst_k};
+}
+
+// The spectral factors: their zeros and the Markov parameters of G(z) D^T.
+void compare_factors(const StateSpace& cand, const StateSpace& ref, int K, ModelComparison& c) {
+  const Eigen::VectorXcd zc = zeros(cand), zr = zeros(ref);
+  c.zero_distance = hausdorff(zc, zr);
+  if (zc.size()) {
+    Eigen::Index i;
+    c.candidate_zero_modulus = zc.cwiseAbs().maxCoeff(&i);
+    c.candidate_worst_zero = zc(i);
+    if (zr.size()) {
+      const cplx mirror = 1.0 / std::conj(zc(i));
+      Eigen::Index j;
+      (zr.array() - mirror).abs().minCoeff(&j);
+      c.reference_zero_near_mirror = zr(j);
+    }
+  }
+  if (zr.size()) c.reference_zero_modulus = zr.cwiseAbs().maxCoeff();
+  const auto side = [](const StateSpace& s) {
+    return MarkovSide{s.D * s.D.transpose(), s.C, s.A, s.B * s.D.transpose()};
+  };
+  std::tie(c.factor_markov_error, c.factor_markov_error_k) = markov_distance(side(cand), side(ref), K);
+}
 }  // namespace
 
 ModelComparison compare_models(const StateSpace& cand, const StateSpace& ref, int grid, int markov) {
@@ -32,7 +84,7 @@ ModelComparison compare_models(const StateSpace& cand, const StateSpace& ref, in
   c.candidate_order = cand.order();
   c.reference_order = ref.order();
   const Eigen::VectorXcd pc = poles(cand), pr = poles(ref);
-  c.pole_distance = std::max(directed_distance(pc, pr), directed_distance(pr, pc));
+  c.pole_distance = hausdorff(pc, pr);
   if (pc.size() && pc.cwiseAbs().maxCoeff() >= 1.0)
     throw Error(ErrorKind::Input, "candidate", "is not stable (pole modulus " + std::to_string(pc.cwiseAbs().maxCoeff()) + ")");
 
@@ -52,21 +104,10 @@ ModelComparison compare_models(const StateSpace& cand, const StateSpace& ref, in
 
   const SpectralSummands sc = spectral_summands(cand), sr = spectral_summands(ref);
   const int K = markov > 0 ? markov : 2 * std::max(cand.order(), ref.order()) + 1;
-  Eigen::MatrixXd Rc = sc.E, Rr = sr.E, CAc = sc.C, CAr = sr.C;  // R(0) = E, then C A^{k-1} F
-  double rscale = Rr.norm(), worst = (Rc - Rr).norm();
-  for (int k = 1; k <= K; ++k) {
-    Rc = CAc * sc.F;
-    Rr = CAr * sr.F;
-    rscale = std::max(rscale, Rr.norm());
-    const double e = (Rc - Rr).norm();
-    if (e > worst) {
-      worst = e;
-      c.markov_error_k = k;
-    }
-    CAc = (CAc * sc.A).eval();
-    CAr = (CAr * sr.A).eval();
-  }
-  c.markov_error = worst / rscale;
+  // R(0) = E, R(k) = C A^{k-1} F
+  std::tie(c.markov_error, c.markov_error_k) =
+      markov_distance({sc.E, sc.C, sc.A, sc.F}, {sr.E, sr.C, sr.A, sr.F}, K);
+  compare_factors(cand, ref, K, c);
   return c;
 }
 

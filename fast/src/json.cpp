@@ -129,12 +129,26 @@ json to_json(const OracleCheck& k) {
           {"spectrum_error_omega", c.spectrum_error_omega},
           {"markov_error", c.markov_error},
           {"markov_error_k", c.markov_error_k},
+          {"factor",
+           {{"agree", k.factor_agrees()},
+            {"zero_distance", c.zero_distance},
+            {"markov_error", c.factor_markov_error},
+            {"markov_error_k", c.factor_markov_error_k},
+            {"candidate_max_zero_modulus", c.candidate_zero_modulus},
+            {"reference_max_zero_modulus", c.reference_zero_modulus},
+            {"minimum_phase", !c.candidate_not_minimum_phase()}}},
+          {"summary", k.summary()},
           {"tolerance",
            {{"spectrum", k.spectrum_tolerance},
             {"poles_and_markov", k.pole_tolerance},
+            {"factor_markov", k.factor_tolerance},
+            {"factor_zeros", k.zero_tolerance},
             {"rule", k.tolerance_given ? "given by --tolerance"
                                        : "4 (p + r) m log2(N) u sigma1/sigma2n (spectrum), times the eigenvalue "
-                                         "condition number of A for poles and Markov parameters"}}},
+                                         "condition number of A for poles and Markov parameters, over "
+                                         "1 - rho_z^2 for the factor's Markov parameters (rho_z: the largest zero "
+                                         "modulus), times the eigenvalue condition number of A - B D^-1 C for its "
+                                         "zeros"}}},
           {"reference_model", k.reference_model}};
 }
 

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "fdsid/error.hpp"
+#include "fdsid/format.hpp"
 
 namespace fdsid {
 
@@ -81,19 +83,37 @@ double eigenvalue_condition_number(const Eigen::MatrixXd& A) {
   return kappa;
 }
 
-bool OracleCheck::agree() const {
-  const ModelComparison& c = comparison;
-  return orders_agree() && c.pole_distance <= pole_tolerance && c.spectrum_error <= spectrum_tolerance &&
-         c.markov_error <= pole_tolerance;
+void set_oracle_tolerances(OracleCheck& check, const StateSpace& reference, int m, int N, double sigma1_over_sigma2n,
+                           double tolerance) {
+  check.tolerance_given = tolerance > 0;
+  if (check.tolerance_given) {
+    check.spectrum_tolerance = check.pole_tolerance = check.factor_tolerance = check.zero_tolerance = tolerance;
+    return;
+  }
+  check.spectrum_tolerance = double_precision_spectrum_tolerance(check.p, check.r, m, N, sigma1_over_sigma2n);
+  check.pole_tolerance = eigenvalue_condition_number(reference.A) * check.spectrum_tolerance;
+  const Eigen::MatrixXd Az = reference.A - reference.B * reference.D.partialPivLu().solve(reference.C);
+  const double rho_z = reference.order() ? Az.eigenvalues().cwiseAbs().maxCoeff() : 0.0;
+  check.factor_tolerance = check.pole_tolerance / (1 - rho_z * rho_z);
+  check.zero_tolerance = eigenvalue_condition_number(Az) * check.factor_tolerance;
 }
 
-void set_oracle_tolerances(OracleCheck& check, const Eigen::MatrixXd& reference_A, int m, int N,
-                           double sigma1_over_sigma2n, double tolerance) {
-  check.tolerance_given = tolerance > 0;
-  check.spectrum_tolerance =
-      tolerance > 0 ? tolerance : double_precision_spectrum_tolerance(check.p, check.r, m, N, sigma1_over_sigma2n);
-  check.pole_tolerance =
-      tolerance > 0 ? tolerance : eigenvalue_condition_number(reference_A) * check.spectrum_tolerance;
+std::string OracleCheck::summary() const {
+  const ModelComparison& c = comparison;
+  std::string out = orders_agree() ? "" : "orders differ: candidate " + std::to_string(c.candidate_order) +
+                                              ", reference " + std::to_string(c.reference_order) + "\n";
+  if (c.candidate_not_minimum_phase() && !factor_agrees())
+    out += "factor: zero " + fmt(std::abs(c.candidate_worst_zero), 4) +
+           " outside the unit circle; the minimum-phase factor has it at " +
+           fmt(std::abs(c.reference_zero_near_mirror), 4) + "\n";
+  char line[320];
+  std::snprintf(line, sizeof line,
+                "%s: poles %.3e (tol %.1e), spectrum %.3e at omega = %.4f (tol %.1e), Markov R(%d) %.3e (tol %.1e), "
+                "factor zeros %.3e (tol %.1e), factor H(%d) %.3e (tol %.1e)\n",
+                agree() ? "AGREES" : "DISAGREES", c.pole_distance, pole_tolerance, c.spectrum_error,
+                c.spectrum_error_omega, spectrum_tolerance, c.markov_error_k, c.markov_error, pole_tolerance,
+                c.zero_distance, zero_tolerance, c.factor_markov_error_k, c.factor_markov_error, factor_tolerance);
+  return out + line;
 }
 
 }  // namespace fdsid

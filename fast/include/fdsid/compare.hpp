@@ -25,10 +25,30 @@ struct ModelComparison {
   /// R(k) = C A^{k-1} F the Markov parameters of the spectral summand, k = 1..K.
   double markov_error = 0;
   int markov_error_k = 0;
+
+  // The spectral factor G(z) = D + C (zI - A)^{-1} B itself, not only its
+  // spectrum G(z) G(1/z)^T: a factor with a zero reflected outside the unit
+  // circle (the anti-stabilising root of the step-9 Riccati equation) has the
+  // same poles, spectrum and summands, and only these quantities see it.
+  // Both are invariant under similarity and under G -> G Q, Q orthogonal.
+  /// Hausdorff distance between the factors' transmission zeros (zeros()).
+  double zero_distance = 0;
+  /// Largest |zero| of each factor (>= 1: not minimum phase; 0 without zeros).
+  double candidate_zero_modulus = 0, reference_zero_modulus = 0;
+  /// The candidate's zero of largest modulus, and the reference zero nearest its
+  /// mirror image 1 / conj(z) (what a reflected zero should have been).
+  cplx candidate_worst_zero{0, 0}, reference_zero_near_mirror{0, 0};
+  /// max over k of ||H_c(k) - H_r(k)||_F / max_k ||H_r(k)||_F with H(0) = D D^T,
+  /// H(k) = C A^{k-1} B D^T (k = 1..K): the Markov parameters of G(z) G(inf)^T.
+  double factor_markov_error = 0;
+  int factor_markov_error_k = 0;
+  /// True when the candidate's factor has a zero on or outside the unit circle.
+  bool candidate_not_minimum_phase() const { return candidate_zero_modulus >= 1.0; }
 };
 
 /// Compares candidate and reference on `grid` points of [0, π] (ends
-/// included) and on the Markov parameters R(0..markov) of their spectral summands.
+/// included), on the Markov parameters R(0..markov) of their spectral
+/// summands, and their spectral factors: zeros and H(0..markov).
 /// Both models must be discrete, square and stable.
 ModelComparison compare_models(const StateSpace& candidate, const StateSpace& reference, int grid = 4097,
                                int markov = 0 /* 0: 2n + 1 */);

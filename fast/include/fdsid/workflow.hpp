@@ -129,20 +129,41 @@ struct OracleCheck {
   Extension extension = Extension::HermitianPart;
   ModelComparison comparison;
   double spectrum_tolerance = 0, pole_tolerance = 0;
+  double factor_tolerance = 0, zero_tolerance = 0;  ///< the spectral factor's Markov parameters and zeros
   bool tolerance_given = false;  ///< by the user, instead of the derived rule
   nlohmann::json reference_model;
   bool orders_agree() const { return comparison.candidate_order == comparison.reference_order; }
-  /// Same order, and poles, spectrum and Markov parameters within tolerance.
-  bool agree() const;
+  bool poles_agree() const { return comparison.pole_distance <= pole_tolerance; }
+  bool spectrum_agrees() const {
+    return comparison.spectrum_error <= spectrum_tolerance && comparison.markov_error <= pole_tolerance;
+  }
+  /// The factor: zeros and H(k) within tolerance (a reflected zero fails both).
+  bool factor_agrees() const {
+    return comparison.zero_distance <= zero_tolerance && comparison.factor_markov_error <= factor_tolerance;
+  }
+  /// Same order, and poles, spectrum, summands and factor within tolerance.
+  bool agree() const { return orders_agree() && poles_agree() && spectrum_agrees() && factor_agrees(); }
+  /// One line naming what failed (or "AGREES: ..."), as `fdsid check` prints it;
+  /// for a factor that is not minimum phase: "factor: zero 1.049 outside the
+  /// unit circle; the minimum-phase factor has it at 0.953".
+  std::string summary() const;
 };
 
 /// Purpose: the tolerances of `fdsid check` and the verdict.
-/// Method: tolerance > 0 is used for everything; else the spectrum tolerance
-/// is double_precision_spectrum_tolerance(p, r, m, N, σ1/σ_2n) and the poles'
-/// and Markov parameters' that times the eigenvalue condition number of the
-/// reference's A.
+/// Method: tolerance > 0 is used for everything; else
+///  - spectrum: double_precision_spectrum_tolerance(p, r, m, N, σ1/σ_2n);
+///  - poles and the summands' Markov parameters: that times κ(A), the
+///    eigenvalue condition number of the reference's A (a perturbation δ of
+///    the shift equations moves an eigenvalue by ≤ κ δ to first order);
+///  - the factor's Markov parameters H(k): the summands' tolerance over
+///    1 − ρ_z², ρ_z the reference's largest zero modulus: B and D come from
+///    the step-9 Riccati equation, whose linearisation at the stabilising
+///    solution is the Stein operator X ↦ X − A_z X A_zᵀ in the closed loop
+///    A_z = A − B D⁻¹ C (eigenvalues: the zeros), with smallest singular value
+///    ≤ 1 − ρ_z² (the same factor spectrum_id.hpp's error estimate carries);
+///  - the zeros: that times κ(A_z), as for the poles.
 /// Fails: never.
-void set_oracle_tolerances(OracleCheck& check, const Eigen::MatrixXd& reference_A, int m, int N,
-                           double sigma1_over_sigma2n, double tolerance);
+void set_oracle_tolerances(OracleCheck& check, const StateSpace& reference, int m, int N, double sigma1_over_sigma2n,
+                           double tolerance);
 
 }  // namespace fdsid
