@@ -6,9 +6,8 @@
 //   - noise-free exactness on random non-uniform grids (discrete) and random
 //     five-decade grids (continuous, bilinear),
 //   - invariance under similarity of the true realisation, and the Eq. (14)
-//     referral of the estimate to the truth,
-//   - consistency as F grows (Theorem 1 with known variance, Theorem 2 with the
-//     sample variance, M = 4).
+//     referral of the estimate to the truth.
+// Consistency as F grows (Theorems 1 and 2): frf_consistency_property.cpp.
 // Tolerances: tests/frf_tolerance.hpp; the statistical margins beside each check.
 #include <gtest/gtest.h>
 #include <rapidcheck/gtest.h>
@@ -185,87 +184,6 @@ RC_GTEST_PROP(FrfSimilarity, SameGAndPolesForASimilarTruthAndEq14RecoversIt, ())
   // referred to `sys` gives the same realisation (b's data came from T⁻¹AT).
   const StateSpace ref_b = refer_realization(b.model, sys, r);
   RC_ASSERT((ref_b.A - sys.A).norm() / sys.A.norm() <= cond(T) * tol + tol);
-}
-
-// RMS over seeds and test frequencies of |Ĝ − G₀| / |G₀|, uniform grids
-// ω_k = π (k − ½)/F (Assumption 8), output noise CN(0, σ²) with σ = 0.03 ·
-// RMS |G₀ − D|; M = 0: known variance; M ≥ 2: M experiments and the sample
-// statistics (Ŷ, σ̂²/M).
-double rms_error(const StateSpace& sys, int F, int M, int r, int seeds, std::uint64_t seed0) {
-  const std::vector<double> test_w = {0.15, 0.6, 1.2, 2.0, 2.9};
-  // σ relative to the dynamic part G₀ − D (the part the subspace step sees):
-  // 3 % of its RMS over the band.
-  double g2 = 0;
-  for (int k = 0; k < 64; ++k) g2 += (frequency_response(sys, M_PI * (k + 0.5) / 64) - sys.D).squaredNorm() / 64;
-  const double var = 9e-4 * g2;
-  double acc = 0;
-  int count = 0;
-  for (int s = 0; s < seeds; ++s) {
-    std::mt19937_64 rng(seed0 + 7919 * s + F);
-    Eigen::VectorXd w(F);
-    for (int k = 0; k < F; ++k) w(k) = M_PI * (k + 0.5) / F;
-    FrfData d;
-    if (M == 0) {
-      std::vector<Eigen::MatrixXcd> G;
-      std::vector<Eigen::MatrixXd> V;
-      for (int k = 0; k < F; ++k) {
-        G.push_back(frequency_response(sys, w(k)) + Eigen::MatrixXcd::Constant(1, 1, complex_normal(rng, var)));
-        V.push_back(Eigen::MatrixXd::Constant(1, 1, var));
-      }
-      d = frf_data(Domain::Discrete, w, G, V);
-    } else {
-      std::vector<std::vector<Eigen::VectorXcd>> U(M), Y(M);
-      for (int k = 0; k < F; ++k) {
-        const cplx G0 = frequency_response(sys, w(k))(0, 0);
-        for (int l = 0; l < M; ++l) {
-          U[l].push_back(Eigen::VectorXcd::Ones(1));
-          // per-experiment variance M σ² so that Ŷ has σ² as with M = 0
-          Y[l].push_back(Eigen::VectorXcd::Constant(1, G0 + complex_normal(rng, M * var)));
-        }
-      }
-      d = sample_statistics(Domain::Discrete, w, U, Y).data;
-    }
-    const FrfResult res = identify_frf_fixed(d, sys.order(), r);
-    for (double om : test_w) {
-      const cplx g0 = frequency_response(sys, om)(0, 0);
-      acc += std::norm((frequency_response(res.model, om)(0, 0) - g0) / g0);
-      ++count;
-    }
-  }
-  return std::sqrt(acc / count);
-}
-
-// DISABLED (open): in about one run in six some generated system fails the
-// 1.60 floor (far more often than the stated 7e-4 family level), and
-// RapidCheck's shrinking of a 48-identification case then runs for many
-// minutes. The cause — a bias that does not shrink with F for some systems, or
-// a wrong margin — is not yet understood. Reproduce: RC_PARAMS="seed=7866651902711361596"
-// ./properties/property_test --gtest_also_run_disabled_tests --gtest_filter=FrfConsistency.*
-RC_GTEST_PROP(FrfConsistency, DISABLED_GErrorShrinksLikeOneOverSqrtF, ()) {
-  // Theorems 1 and 2: Ĝ − G₀ = O_p(F^{-1/2}), so the RMS error at F = 800 is
-  // 1/4 of that at F = 50. Margin: the RMS over S seeds of a complex Gaussian
-  // error has log-std ≤ 1/(2√S) (χ² with ≥ 2S degrees of freedom; fully
-  // correlated test frequencies are the worst case); the ratio of two
-  // independent RMS ≤ 1/√(2S). z = 4.5 (one-sided p = 3.4e-6, Bonferroni over
-  // the ≤ 200 checks of 100 cases: family error ≤ 7e-4):
-  // ratio ≥ 4 exp(−4.5/√(2S)) = 1.60 for S = 12. No upper bound: at F = 50
-  // second-order terms only make the ratio larger. With the sample variance
-  // (M = 4) the errors are Gaussian mixtures (random weights 1/σ̂²); Theorem 3
-  // bounds the inflation by (M−2)/(M−3) at both F, so the same margin is used.
-  const SystemSpec spec = *gen_system_spec(1, 4);
-  const StateSpace sys = make_system(spec);
-  const int n = sys.order(), r = 2 * n + 2, S = 12;
-  const std::uint64_t seed = *rc::gen::inRange<std::uint64_t>(0, 1000000);
-  const double floor = 4 * std::exp(-4.5 / std::sqrt(2.0 * S));
-  RC_LOG() << spec << "\nseed " << seed << "\n";
-  for (int M : {0, 4}) {
-    const double e50 = rms_error(sys, 50, M, r, S, seed), e800 = rms_error(sys, 800, M, r, S, seed);
-    RC_LOG() << (M == 0 ? "known variance" : "sample variance, M = 4") << ": RMS error F=50 " << e50
-             << ", F=800 " << e800 << ", ratio " << e50 / e800 << " (>= " << floor << ")\n";
-    RC_CLASSIFY(e50 / e800 < 3, M == 0 ? "known: ratio < 3" : "sample: ratio < 3");
-    RC_CLASSIFY(e50 / e800 > 6, M == 0 ? "known: ratio > 6" : "sample: ratio > 6");
-    RC_ASSERT(e50 / e800 >= floor);
-  }
 }
 
 }  // namespace
