@@ -99,6 +99,13 @@ TEST(Json, OracleCheckVerdict) {
   set_oracle_tolerances(k, first_order(0.5), 1, 64, 10.0, 1e-8);
   EXPECT_TRUE(k.agree());
   EXPECT_EQ(to_json(k)["tolerance"]["rule"], "given by --tolerance");
+  // Per quantity: distance, tolerance, ratio (issue 13: the tightness of the oracle).
+  const nlohmann::json q = to_json(k)["quantities"];
+  ASSERT_EQ(q.size(), 5u);
+  EXPECT_EQ(q[0]["quantity"], "poles");
+  EXPECT_DOUBLE_EQ(q[0]["ratio"].get<double>(), 1e-9 / 1e-8);
+  EXPECT_EQ(q[1]["quantity"], "spectrum");
+  EXPECT_DOUBLE_EQ(q[1]["ratio"].get<double>(), 1e-10 / 1e-8);
   k.comparison.reference_order = 3;
   EXPECT_FALSE(k.agree());
   EXPECT_EQ(to_json(k)["agree"], false);

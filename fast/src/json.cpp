@@ -1,6 +1,8 @@
 #include "fdsid/json.hpp"
 
 #include <cmath>
+#include <limits>
+#include <utility>
 
 namespace fdsid {
 
@@ -114,9 +116,28 @@ json to_json(const GapReport& report) { return gap_report_to_json(report); }
 
 json to_json(const GapValidation& validation) { return gap_validation_to_json(validation); }
 
+namespace {
+// Each compared quantity with its distance, tolerance and their ratio (<= 1: within).
+json oracle_quantities(const OracleCheck& k) {
+  const ModelComparison& c = k.comparison;
+  const std::pair<const char*, std::pair<double, double>> q[] = {
+      {"poles", {c.pole_distance, k.pole_tolerance}},
+      {"spectrum", {c.spectrum_error, k.spectrum_tolerance}},
+      {"summand_markov", {c.markov_error, k.pole_tolerance}},
+      {"factor_zeros", {c.zero_distance, k.zero_tolerance}},
+      {"factor_markov", {c.factor_markov_error, k.factor_tolerance}}};
+  json out = json::array();
+  for (const auto& [name, dt] : q)
+    out.push_back({{"quantity", name}, {"distance", dt.first}, {"tolerance", dt.second},
+                   {"ratio", dt.second > 0 ? dt.first / dt.second : std::numeric_limits<double>::infinity()}});
+  return out;
+}
+}  // namespace
+
 json to_json(const OracleCheck& k) {
   const ModelComparison& c = k.comparison;
   return {{"agree", k.agree()},
+          {"quantities", oracle_quantities(k)},
           {"candidate", k.candidate_path},
           {"data", k.data_path},
           {"order", {{"candidate", c.candidate_order}, {"reference", c.reference_order}}},
