@@ -102,7 +102,8 @@ TEST_F(CliPlot, ProgressOnlyOnATerminal) {
   ASSERT_TRUE(Succeeded(quiet));
   EXPECT_EQ(quiet.err, "");
   // On a pseudo-terminal (util-linux `script`), the count of realisations.
-  if (std::system("command -v script >/dev/null 2>&1") != 0) GTEST_SKIP() << "no `script` to provide a terminal";
+  ASSERT_EQ(std::system("command -v script >/dev/null 2>&1"), 0)
+      << "util-linux `script` (Debian package bsdutils, installed by scripts/install-deps.sh) provides the terminal";
   const RunResult tty = run_fdsid_via_script({"reproduce", "table2", "--realizations", "3", "--M", "200",
                                               "--vo-epsilon", "0"});
   ASSERT_TRUE(Succeeded(tty));
