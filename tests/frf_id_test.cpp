@@ -218,6 +218,40 @@ TEST(BilinearToContinuous, MatchesTheWDomainModelOnTheImaginaryAxis) {
 }
 
 // ---------------------------------------------------------------------------
+// An unstable estimate is said so (issue 14): the subspace estimate
+// interpolates the data and does not enforce stability. Noise-free data of an
+// unstable system (its frequency response is defined on the grid) give back
+// the unstable pole exactly; a stable system gives no such warning.
+
+bool has_unstable_warning(const FrfResult& res, const std::string& text) {
+  for (const std::string& w : res.warnings)
+    if (w.find("the identified model is unstable: pole " + text) == 0) return true;
+  return false;
+}
+
+TEST(FrfWarnings, AnUnstableEstimateIsNamed) {
+  StateSpace sys;  // G(z) = 0.5 + 1/(z - 1.25): a pole outside the unit circle
+  sys.A = Eigen::MatrixXd::Constant(1, 1, 1.25);
+  sys.B = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  sys.C = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  sys.D = Eigen::MatrixXd::Constant(1, 1, 0.5);
+  Eigen::VectorXd w(40);
+  for (int k = 0; k < 40; ++k) w(k) = M_PI * (k + 0.5) / 40;
+  const FrfResult res = identify_frf_fixed(noise_free_frf(sys, w), 1, 4);
+  EXPECT_TRUE(has_unstable_warning(res, "1.25+0j of modulus 1.25 >= 1")) << ::testing::PrintToString(res.warnings);
+
+  StateSpace cont = two_resonances();  // the 50 rad/s pair moved to Re s = +5
+  cont.A(2, 2) = cont.A(3, 3) = 5.0;
+  const FrfResult rc = identify_frf_fixed(noise_free_frf(cont, log_grid(0.01, 1000, 60)), 4, 8);
+  EXPECT_TRUE(has_unstable_warning(rc, "5")) << ::testing::PrintToString(rc.warnings);
+  EXPECT_NE(::testing::PrintToString(rc.warnings).find("j with real part >= 0; it fits"), std::string::npos)
+      << ::testing::PrintToString(rc.warnings);
+
+  const FrfResult stable = identify_frf_fixed(noise_free_frf(eq36(), w), 4, 8);
+  for (const std::string& s : stable.warnings) EXPECT_EQ(s.find("unstable"), std::string::npos) << s;
+}
+
+// ---------------------------------------------------------------------------
 // Automatic order and r (Section 5)
 
 TEST(FrfAutomatic, OrderFromNoiseFreeDataWithSmallDeclaredVariance) {

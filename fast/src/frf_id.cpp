@@ -562,6 +562,32 @@ Eigen::VectorXd frf_singular_values(const FrfData& data, int r, ContinuousMethod
   return step1(data, b, r).sigma;
 }
 
+namespace {
+// The warning for an unstable estimate, or "" (issue 14: identify-frf said
+// nothing). Unstable: a pole of modulus >= 1 (discrete) or real part >= 0
+// (continuous); the worst one is named. The subspace estimate interpolates
+// the data and does not enforce stability, so this is a property of the
+// result, not an error.
+std::string instability_warning(Domain domain, const Eigen::VectorXcd& poles) {
+  const bool discrete = domain == Domain::Discrete;
+  Eigen::Index worst = -1;
+  double margin = 0;  // |λ| − 1 or Re λ: >= 0 is unstable
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    const double m = discrete ? std::abs(poles(i)) - 1 : poles(i).real();
+    if (m >= 0 && (worst < 0 || m > margin)) {
+      worst = i;
+      margin = m;
+    }
+  }
+  if (worst < 0) return "";
+  const cplx z = poles(worst);
+  return "the identified model is unstable: pole " + fmt(z.real(), 6) + (z.imag() < 0 ? "-" : "+") +
+         fmt(std::abs(z.imag()), 6) + "j " +
+         (discrete ? "of modulus " + fmt(std::abs(z), 6) + " >= 1" : "with real part >= 0") +
+         "; it fits the data's frequency response but must not be simulated: try another --order or --r";
+}
+}  // namespace
+
 FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMethod continuous, double omega_scale) {
   validate(d);
   check_order_r(d, order, r);
@@ -635,6 +661,8 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
                            "); compare with --precision high");
   res.v_sub = v_sub(est, d);
   res.poles = poles(est);
+  const std::string unstable = instability_warning(est.domain, res.poles);
+  if (!unstable.empty()) res.warnings.push_back(unstable);
   return res;
 }
 
