@@ -1,4 +1,4 @@
-# fdsid_discover_tests(TARGET LABELS l1;l2;... [WORKING_DIRECTORY dir] [SLOW test1 test2 ...])
+# fdsid_discover_tests(TARGET LABELS l1;l2;... [WORKING_DIRECTORY dir] [SLOW test1 ...] [LONG test1 ...])
 #
 # gtest_discover_tests with a list of ctest labels. gtest_discover_tests
 # (CMake 3.25) flattens list-valued PROPERTIES ("LABELS a;b" becomes LABELS = a
@@ -9,9 +9,16 @@
 # build (Monte Carlo loops, the 50-digit reference at -O1 under ASan): they get
 # the label `slow` instead of `quick`, so the Release run of the whole suite
 # runs them and the sanitizer/coverage run (`ctest -L quick`) does not.
+#
+# LONG names quick tests that take a large share of the sanitizer/coverage run
+# (FrfConsistency.GErrorShrinksLikeOneOverSqrtF: ~150 s of a ~500 s·proc
+# suite). They get COST 1000, so ctest -j2 starts them first even in a fresh
+# build dir, where it has no Testing/Temporary/CTestCostData.txt yet: started
+# last, the longest test ran alone on one core for two minutes (CI: 323 s of
+# tests where the cost data of a second run gave ~260 s).
 include(GoogleTest)
 function(fdsid_discover_tests target)
-  cmake_parse_arguments(ARG "" "WORKING_DIRECTORY" "LABELS;SLOW" ${ARGN})
+  cmake_parse_arguments(ARG "" "WORKING_DIRECTORY" "LABELS;SLOW;LONG" ${ARGN})
   if(NOT ARG_WORKING_DIRECTORY)
     set(ARG_WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
   endif()
@@ -25,10 +32,11 @@ function(fdsid_discover_tests target)
   file(WRITE ${file}
     "if(DEFINED ${target}_TESTS)\n"
     "  set(slow ${ARG_SLOW})\n"
-    "  foreach(t IN LISTS slow)\n"
+    "  set(long ${ARG_LONG})\n"
+    "  foreach(t IN LISTS slow long)\n"
     "    list(FIND ${target}_TESTS \${t} i)\n"
     "    if(i EQUAL -1)\n"
-    "      message(FATAL_ERROR \"fdsid_discover_tests(${target}): SLOW test \${t} does not exist\")\n"
+    "      message(FATAL_ERROR \"fdsid_discover_tests(${target}): SLOW/LONG test \${t} does not exist\")\n"
     "    endif()\n"
     "  endforeach()\n"
     "  foreach(t IN LISTS ${target}_TESTS)\n"
@@ -38,6 +46,9 @@ function(fdsid_discover_tests target)
     "    else()\n"
     "      set_tests_properties(\${t} PROPERTIES LABELS \"${slow_labels}\")\n"
     "    endif()\n"
+    "  endforeach()\n"
+    "  foreach(t IN LISTS long)\n"
+    "    set_tests_properties(\${t} PROPERTIES COST 1000)\n"
     "  endforeach()\n"
     "endif()\n")
   set_property(DIRECTORY APPEND PROPERTY TEST_INCLUDE_FILES ${file})
