@@ -48,9 +48,22 @@ CLI::Validator order_value() {
       "n|auto");
 }
 
+CLI::Validator output_path(const std::string& option) {
+  return CLI::Validator(
+      [option](std::string& s) -> std::string {
+        if (s.empty()) return "empty path (use - for stdout)";
+        try {
+          require_writable_path(s, option);
+        } catch (const Error& e) {
+          return e.message();
+        }
+        return {};
+      },
+      "FILE");
+}
+
 CLI::Option* add_json_option(CLI::App* sub, std::string& path, const std::string& what) {
-  return sub->add_option("--json", path, what)->check(CLI::Validator(
-      [](std::string& s) -> std::string { return s.empty() ? "empty path (use - for stdout)" : ""; }, "FILE|-"));
+  return sub->add_option("--json", path, what)->check(output_path("--json"));
 }
 
 CLI::Option* add_plot_option(CLI::App* sub, std::string& path) {
@@ -59,6 +72,7 @@ CLI::Option* add_plot_option(CLI::App* sub, std::string& path) {
           [](std::string& s) -> std::string {
             try {
               plot::check_plot_path(s);
+              require_writable_path(s, "--plot");
             } catch (const Error& e) {
               return e.message();
             }

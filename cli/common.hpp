@@ -70,6 +70,10 @@ extern const std::map<std::string, Precision> kPrecisions;  // double, high
 /// --order: a positive integer (<= 1000) or auto (stored as 0).
 CLI::Validator order_value();
 
+/// An output file option (--out, --json, ...): checked at parse time, before
+/// any work (fdsid::require_writable_path: folder exists and is writable, the
+/// path is no folder); "-" (stdout) passes.
+CLI::Validator output_path(const std::string& option);
 /// --json FILE (- = stdout); an empty path is refused.
 CLI::Option* add_json_option(CLI::App* sub, std::string& path, const std::string& what);
 /// --plot FILE (.svg or .png); checked when given.

@@ -120,7 +120,7 @@ void register_gap_diagnosis(CLI::App& app, Action& chosen) {
   gap->add_option("--meta", c->meta_path, "meta JSON: period, periods, sample_time, excited_lines")->required();
   add_json_option(gap, c->json_path, "write the report here (- = stdout)");
   add_plot_option(gap, c->plot_path);
-  gap->add_option("--table", c->table_path, "write the plot-ready table (frequency, t before/after, flag) here");
+  gap->add_option("--table", c->table_path, "write the plot-ready table (frequency, t before/after, flag) here")->check(output_path("--table"));
   gap->add_option("--alpha", o.alpha, "level of each detection test (default 0.01)");
   gap->add_option("--effect-alpha", o.effect_alpha, "level of the F-test admitting an effect (default 1e-3)");
   gap->add_option("--fdr", o.fdr, "false-discovery rate of the bands (default 0.05)");

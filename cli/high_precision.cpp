@@ -96,8 +96,30 @@ int check(const std::string& json_path, const std::string& model_path, const std
   if (candidate.order() < 1) throw Error(ErrorKind::Input, model_path, "candidate has order 0");
 
   int m = 0, M = 0;
-  const reference::Result res = run_reference(data_path, candidate.order(), p, r, vo, ext, m, M);
+  const int p_given = p, r_given = r;
+  std::string note;
+  reference::Result res;
+  try {
+    res = run_reference(data_path, candidate.order(), p, r, vo, ext, m, M);
+  } catch (const Error& e) {
+    if (e.kind() != ErrorKind::Numerical) throw;
+    // The reference cannot identify these data at the candidate's order (a
+    // step of Algorithm 1 fails, e.g. no stable/antistable split at step 6):
+    // that is a disagreement about the order, not bad input. The reference is
+    // run again with the order read from its singular values, and the
+    // candidate is compared with that model (the orders then differ).
+    p = p_given;
+    r = r_given;
+    res = run_reference(data_path, 0, p, r, vo, ext, m, M);
+    if (res.order == candidate.order()) throw;
+    const std::string what = e.what();
+    const auto at = what.find("step ");
+    note = "the reference fails at the candidate's order " + std::to_string(candidate.order()) +
+           (at == std::string::npos ? std::string() : " (" + what.substr(at, what.find(':', at) - at) + ")") +
+           "; the data support order " + std::to_string(res.order) + ", which the candidate is compared with";
+  }
   OracleCheck k;
+  k.note = note;
   k.candidate_path = model_path;
   k.data_path = data_path;
   k.p = p;

@@ -1,5 +1,6 @@
 // fdsid identify-frf: frequency-domain subspace identification from FRF
 // samples or periodic input/output records (Pintelon 2002).
+#include <algorithm>
 #include <memory>
 
 #include "common.hpp"
@@ -46,8 +47,14 @@ int run_high(const IdentifyFrfCommand& c, const FrfData& data, const std::string
     } catch (const Error& e) {
       throw e.within(where);
     }
-    note = "order " + std::to_string(sel.order) + " and r " + std::to_string(sel.r) +
-           " chosen by the double-precision selection (singular values / V_SUB, Pintelon 2002 Section 5)";
+    // Name only what was chosen (review finding 21: a given order was reported as chosen).
+    if (c.options.order == 0)
+      note = "order " + std::to_string(sel.order) + (c.options.r == 0 ? " and r " + std::to_string(sel.r) : "") +
+             " chosen by the double-precision selection (singular values" + (c.options.r == 0 ? ", V_SUB" : "") +
+             "; Pintelon 2002 Section 5)";
+    else
+      note = "r " + std::to_string(sel.r) + " chosen by the double-precision selection (minimal V_SUB, Pintelon 2002 "
+             "Section 5) for the given order " + std::to_string(sel.order);
   }
   q.order = sel.order;
   q.r = sel.r;
@@ -109,7 +116,13 @@ int run(const IdentifyFrfCommand& c) {
   } catch (const Error& e) {
     throw e.within(where);
   }
-  out << "identified order " << res.order << (o.order == 0 ? " (read from the singular values)" : "") << " by "
+  const bool capped = o.order == 0 &&
+                      std::any_of(res.warnings.begin(), res.warnings.end(),
+                                  [](const std::string& w) { return w.find("top of the searched range") != std::string::npos; });
+  out << "identified order " << res.order
+      << (o.order == 0 ? (capped ? " (the top of the searched range; see the warning)" : " (read from the singular values)")
+                       : "")
+      << " by "
       << method << " from F = " << data.frequencies() << " frequencies"
       << (source.periods > 0 ? ", M = " + std::to_string(source.periods) + " periods" : std::string())
       << ", r = " << res.r << (o.r == 0 ? " (minimising V_SUB)" : "") << "\n";
@@ -141,6 +154,8 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
   add_plot_option(idf, c->plot_path);
   idf->add_option("--order", o.order, "model order n_a, or auto (from the singular values of step 1c)")
       ->transform(order_value());
+  idf->add_option("--max-order", o.max_order, "largest order --order auto considers (default min(20, r p - 1))")
+      ->check(CLI::Range(1, 1000));
   idf->add_option("--r", o.r, "r > n_a (default: minimise V_SUB, Eq. 35, over [1.5 n_a, 6 n_a])");
   idf->add_option("--r-max", o.r_max, "upper end of the r search (default 6 n_a)");
   idf->add_option("--domain", c->domain, "discrete (omega in rad/sample, default) or continuous (rad/s)")
@@ -157,7 +172,7 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
   auto* eiv = idf->add_flag("--eiv", c->eiv,
                             "noisy input: identify from G = Y/U with the variance of Eq. (31) (Section 5; needs "
                             "--data, --meta: the input noise is estimated over the periods)");
-  idf->add_option("--eiv-variance", c->eiv_variance,
+  auto* eiv_variance = idf->add_option("--eiv-variance", c->eiv_variance,
                   "data (Eq. 31 from the noisy ratio) or model (re-evaluated at a first-pass model: consistent)")
       ->transform(choice(std::map<std::string, EivVariance>{{"data", EivVariance::Data}, {"model", EivVariance::Model}},
                          "is not data or model"));
@@ -166,6 +181,7 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
                     "improper G: identify 1/G by swapping input and output (Section 5; needs --data, --meta)");
   // Both need periodic records: the input noise is estimated over the periods.
   eiv->needs(data)->excludes(improper);
+  eiv_variance->needs(eiv);  // review finding 49: it was ignored without --eiv
   improper->needs(data);
   idf->add_option("--min-input-snr", c->min_input_snr, "drop lines whose input SNR is below this (default 10)");
   on_parsed(idf, c, chosen, run);

@@ -62,7 +62,7 @@ void register_sample_spectrum(CLI::App& app, Action& chosen) {
   smp->add_option("--M", c->M, "grid: M+1 samples from 0 to pi")->required();
   smp->add_option("--epsilon", c->epsilon, "add Akcay (2011) Section 4 noise of this level");
   smp->add_option("--seed", c->seed, "random seed of the noise");
-  smp->add_option("--out", c->out_path, "CSV output (- = stdout)");
+  smp->add_option("--out", c->out_path, "CSV output (- = stdout)")->check(output_path("--out"));
   smp->add_option("--precision", c->precision, "double (default) or high (50-digit reference, 40 digits written)")
       ->transform(choice(kPrecisions, "is not double or high"));
   on_parsed(smp, c, chosen, run);

@@ -37,8 +37,8 @@ void register_simulate_records(CLI::App& app, Action& chosen) {
   RecordOptions& rec = c->options;
   auto* sim = app.add_subcommand("simulate-records", "periodic multisine experiment on a model: u,y CSV and meta JSON");
   sim->add_option("--model", c->model_path, "discrete SISO model JSON")->required();
-  sim->add_option("--out", c->out_path, "records CSV (u,y)")->required();
-  sim->add_option("--meta-out", c->meta_path, "meta JSON")->required();
+  sim->add_option("--out", c->out_path, "records CSV (u,y)")->check(output_path("--out"))->required();
+  sim->add_option("--meta-out", c->meta_path, "meta JSON")->check(output_path("--meta-out"))->required();
   sim->add_option("--period", rec.period, "samples per period")->check(CLI::Range(4, 1 << 24));
   sim->add_option("--periods", rec.periods, "periods M")->check(CLI::Range(1, 100000));
   sim->add_option("--lines", rec.lines, "excited DFT lines (default: odd lines below P/4)");

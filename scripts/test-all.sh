@@ -12,7 +12,7 @@
 #     runs the `quick` label (every other test) and checks the 90 % line
 #     threshold on fast/ and reference/ (coverage/CMakeLists.txt; LeakSanitizer
 #     suppressions for fontconfig and libltdl only: coverage/lsan.supp).
-#  3. Every libFuzzer target for FDSID_FUZZ_SECONDS (default 30) s, two at a
+#  3. Every libFuzzer target for FDSID_FUZZ_SECONDS (default 20) s, two at a
 #     time (scripts/fuzz.sh; clang, ASan + UBSan), failing on any finding.
 #
 # Results do not depend on the optimisation level (no -ffast-math; Eigen's
@@ -28,7 +28,7 @@ t_deps=$(date +%s)
 
 cmake -S . -B build -DFDSID_BUILD_TESTS=ON -DFDSID_BUILD_BENCH=ON
 cmake --build build -j2 --target fdsid bench_spectrum bench_frf bench_gap \
-  paper_golden_test figure_test consistency_property_test cli_test
+  paper_golden_test figure_test consistency_property_test frf_consistency_property_test cli_test
 t_rel_build=$(date +%s)
 ctest --test-dir build --output-on-failure -j2 -L 'slow|docs|install'
 t_rel_test=$(date +%s)
@@ -41,7 +41,7 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:ha
   cmake --build build-cov --target coverage
 t_cov_test=$(date +%s)
 
-bash scripts/fuzz.sh "${FDSID_FUZZ_SECONDS:-30}"
+bash scripts/fuzz.sh "${FDSID_FUZZ_SECONDS:-20}"
 t_fuzz=$(date +%s)
 
 echo "== CI stages (s): deps $((t_deps - t0)), release build $((t_rel_build - t_deps)), release tests $((t_rel_test - t_rel_build)), sanitizer+coverage build $((t_cov_build - t_rel_test)), its tests+report $((t_cov_test - t_cov_build)), fuzz $((t_fuzz - t_cov_test)); total $((t_fuzz - t0))"

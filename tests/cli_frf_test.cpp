@@ -569,13 +569,89 @@ TEST_F(CliFrf, GapRefusesWhatItCannotUse) {
   const std::string short_meta = write("short.meta.json", meta.dump());
   EXPECT_TRUE(IsBadInput(
       run_fdsid({"gap", "--model", model, "--data", path("rec.csv"), "--meta", short_meta}), {}));
-  const std::string mimo = write("mimo.json", R"({"domain": "discrete", "A": [[0.5]], "B": [[1]],
+  const std::string mimo = write("mimo.json", R"({"domain": "discrete", "sample_time": 1.0, "A": [[0.5]], "B": [[1]],
       "C": [[1], [2]], "D": [[0], [0]]})");
   EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", mimo, "--data", path("rec.csv"), "--meta", path("rec.meta.json")}),
                          {"SISO"}));
+  json half = json::parse(kPintelonModel);
+  half["sample_time"] = 0.5;
+  const std::string ts = write("ts05.json", half.dump());
+  EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", ts, "--data", path("rec.csv"), "--meta", path("rec.meta.json")}),
+                         {"\"sample_time\"", "0.5 s differs from the record's 1 s"}));
   EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", model, "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
                                     "--json", path("rec.csv")}),
                          {"refusing to overwrite"}));
+}
+
+// Review findings 1 and 15: a 0-based meta (every line k listed as k - 1) made
+// `gap` answer "no gap" with exit 0 and identify-frf print "-nan ... use fewer r".
+TEST_F(CliFrf, ExcitedLinesWithoutInputPowerAreNamed) {
+  simulate(256, 8, 0.01, "rec");
+  json meta = read_json("rec.meta.json");
+  std::vector<int> zero_based;
+  for (int k : meta.at("excited_lines").get<std::vector<int>>())
+    if (k - 1 >= 1) zero_based.push_back(k - 1);
+  meta["excited_lines"] = zero_based;
+  const std::string bad = write("zero_based.meta.json", meta.dump());
+  const std::string model = write("model.json", kPintelonModel);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", bad}),
+                         {"zero_based.meta.json", "\"excited_lines\"", "63 of the 63 listed lines carry no input power",
+                          "1-based"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", model, "--data", path("rec.csv"), "--meta", bad}),
+                         {"63 of the 63 listed lines carry no input power"}));
+  // The right meta passes the same test.
+  EXPECT_TRUE(Succeeded(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json")})));
+}
+
+// Review finding 4: with a noise model far too optimistic (G_var 1e-12 for
+// noise of variance 2e-6), every singular value lies above the noise level and
+// --order auto stopped at its cap, 19, calling it "read from the singular
+// values". The warning says it is the top of the range; --max-order moves it.
+TEST_F(CliFrf, AnOrderAtTheTopOfTheSearchedRangeIsSaid) {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> n01(0.0, 1e-3);
+  std::string text = "omega,G_re,G_im,G_var\n";
+  char line[160];
+  for (int k = 1; k <= 100; ++k) {
+    const double w = M_PI * k / 101;
+    const auto g = G_at(pintelon_plant(), std::polar(1.0, w));
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,1e-12\n", w, g.real() + n01(rng), g.imag() + n01(rng));
+    text += line;
+  }
+  const std::string frf = write("optimistic.csv", text);
+  const RunResult r = run_fdsid({"identify-frf", "--frf", frf, "--r", "12"});
+  ASSERT_TRUE(Succeeded(r));
+  EXPECT_NE(r.out.find("identified order 11 (the top of the searched range; see the warning)"), std::string::npos)
+      << describe(r);
+  EXPECT_NE(r.out.find("warning: order 11 is the top of the searched range (n <= 11 at r = 12)"), std::string::npos)
+      << describe(r);
+  const RunResult lower = run_fdsid({"identify-frf", "--frf", frf, "--r", "12", "--max-order", "6"});
+  ASSERT_TRUE(Succeeded(lower));
+  EXPECT_NE(lower.out.find("warning: order 6 is the top of the searched range (n <= 6 at r = 12)"), std::string::npos)
+      << describe(lower);
+}
+
+// Review finding 49: --eiv-variance without --eiv was silently ignored.
+TEST_F(CliFrf, EivVarianceNeedsEiv) {
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", path("r.csv"), "--meta", path("r.meta.json"),
+                                    "--eiv-variance", "model"}),
+                         {"--eiv-variance", "--eiv"}));
+}
+
+// Review finding 9: simulate-records wrote a meta identify-frf refuses (a line
+// listed twice) and the non-causal periodic "steady state" of an unstable model.
+TEST_F(CliFrf, SimulateRecordsRefusesWhatIdentifyFrfWouldRefuse) {
+  const std::string model = write("plant.json", kPintelonModel);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"simulate-records", "--model", model, "--out", path("a.csv"), "--meta-out",
+                                    path("a.meta.json"), "--period", "64", "--periods", "4", "--lines", "2", "2"}),
+                         {"excited line 2 is listed twice"}));
+  const std::string unstable = write("unstable.json", R"({"domain": "discrete", "sample_time": 1.0,
+      "A": [[1.1, 0], [0, 0.5]], "B": [[1], [1]], "C": [[1, 1]], "D": [[0]]})");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"simulate-records", "--model", unstable, "--out", path("b.csv"), "--meta-out",
+                                    path("b.meta.json"), "--period", "64", "--periods", "4"}),
+                         {"pole of modulus 1.1", "no periodic steady state"}));
+  EXPECT_FALSE(fs::exists(path("a.csv")));
+  EXPECT_FALSE(fs::exists(path("b.csv")));
 }
 
 TEST_F(CliFrf, GapValidateScoresBlindCases) {

@@ -94,6 +94,21 @@ TEST_F(CliPlot, BadPlotPathsAreRefusedBeforeAnyWork) {
                                     path("h.svg")}),
                          {"--plot", "double-precision"}));
   EXPECT_FALSE(fs::exists(path("h.svg")));
+  // Review finding 6: the summary was printed and --json written before the
+  // --plot folder was found missing; --json paths were not checked at all.
+  const RunResult both = run_fdsid({"identify-spectrum", "--data", data, "--plot", path("nodir/out.png"), "--json",
+                                    path("j.json")});
+  EXPECT_TRUE(IsBadInput(both, {"--plot", "nodir", "does not exist"}));
+  EXPECT_EQ(both.out, "");
+  EXPECT_FALSE(fs::exists(path("j.json")));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-spectrum", "--data", data, "--json", path("nodir/j.json")}),
+                         {"--json", "does not exist"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-spectrum", "--data", data, "--json", dir_.string()}),
+                         {"--json", "is a folder"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"reproduce", "table2", "--json", path("nodir/t2.json")}, 10), {"--json"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"sample-spectrum", "--model", kSource + "/fixtures/systems/akcay2011.json", "--M",
+                                    "8", "--out", path("nodir/s.csv")}),
+                         {"--out", "does not exist"}));
 }
 
 TEST_F(CliPlot, ProgressOnlyOnATerminal) {

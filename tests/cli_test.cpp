@@ -171,9 +171,12 @@ TEST_F(Cli, SpectrumWrongFieldCount) {
 TEST_F(Cli, SpectrumNonNumericCell) {
   const std::string base = spectrum_csv(16, ar1_spectrum);
   const std::string f = write("abc.csv", replace_line(base, 4, "0.39269908169872414,abc,0"));
-  EXPECT_TRUE(IsBadInput(identify(f), {f + " line 4", "S_re", "\"abc\" is not a number"}));
+  EXPECT_TRUE(IsBadInput(identify(f), {f + " line 4", "S_re", "\"abc\" is not a decimal number"}));
   const std::string g = write("trailing.csv", replace_line(base, 3, "0.19634954084936207,1.2x,0"));
-  EXPECT_TRUE(IsBadInput(identify(g), {g + " line 3", "S_re", "not a number"}));
+  EXPECT_TRUE(IsBadInput(identify(g), {g + " line 3", "S_re", "not a decimal number"}));
+  // strtod read "0x10" as 16 (review finding 12): hexadecimal is not a number of the format.
+  const std::string x = write("hex.csv", replace_line(base, 5, "0.58904862254808621,0x10,0"));
+  EXPECT_TRUE(IsBadInput(identify(x), {x + " line 5", "S_re", "\"0x10\" is not a decimal number", "hexadecimal"}));
   const std::string h = write("empty-cell.csv", replace_line(base, 6, "0.78539816339744828,1.0,"));
   EXPECT_TRUE(IsBadInput(identify(h), {h + " line 6", "S_im", "empty"}));
 }
@@ -187,13 +190,15 @@ TEST_F(Cli, SpectrumNanAndInfCells) {
                {4, "0.39269908169872414,1.0,NaN", "S_im"},
                {5, "0.58904862254808621,inf,0", "S_re"},
                {6, "0.78539816339744828,-Infinity,0", "S_re"},
-               {7, "0.98174770424681035,1e999,0", "S_re"},
                {2, "nan,1.0,0", "omega"}};
   int i = 0;
   for (const auto& c : cases) {
     const std::string f = write("nonfinite" + std::to_string(i++) + ".csv", replace_line(base, c.line, c.row));
     EXPECT_TRUE(IsBadInput(identify(f), {f + " line " + std::to_string(c.line), c.column, "not finite"}));
   }
+  // 1e999 is no NaN or Inf literal: it is a number beyond the double range (review finding 21).
+  const std::string big = write("overflow.csv", replace_line(base, 7, "0.98174770424681035,1e999,0"));
+  EXPECT_TRUE(IsBadInput(identify(big), {big + " line 7", "S_re", "\"1e999\" overflows a double"}));
 }
 
 TEST_F(Cli, SpectrumOffUniformGrid) {
@@ -347,7 +352,7 @@ TEST_F(CliModel, MissingFieldA) {
 }
 
 TEST_F(CliModel, NonSquareA) {
-  const std::string f = write("nonsquare.json", R"({"A": [[0.5, 0.1]], "B": [[1.0]], "C": [[1.0, 0.0]], "D": [[1.0]]})");
+  const std::string f = write("nonsquare.json", R"({"domain": "discrete", "sample_time": 1, "A": [[0.5, 0.1]], "B": [[1.0]], "C": [[1.0, 0.0]], "D": [[1.0]]})");
   EXPECT_TRUE(IsBadInput(sample(f), {f, "A must be square", "1x2"}));
 }
 
@@ -371,6 +376,12 @@ TEST_F(CliModel, WrongDShape) {
 TEST_F(CliModel, BadDomain) {
   const std::string f = model_with("domain.json", "domain", R"("z-plane")");
   EXPECT_TRUE(IsBadInput(sample(f), {f, "field \"domain\"", "z-plane"}));
+  // Review finding 10: without "domain" or "sample_time" the model was taken
+  // as discrete with Ts = 1, silently.
+  const std::string g = model_with("no-domain.json", "domain", "");
+  EXPECT_TRUE(IsBadInput(sample(g), {g, "field \"domain\"", "is missing"}));
+  const std::string h = model_with("no-ts.json", "sample_time", "");
+  EXPECT_TRUE(IsBadInput(sample(h), {h, "field \"sample_time\"", "is missing"}));
 }
 
 TEST_F(CliModel, BadM) {
@@ -477,7 +488,10 @@ TEST_F(Cli, JsonToFileLeavesNoTemporary) {
 
 TEST_F(Cli, JsonToUnwritablePath) {
   const std::string out = path("no-such-dir/result.json");
-  EXPECT_TRUE(IsBadInput(identify(good_spectrum(64), {"--json", out}), {out, "cannot write"}));
+  // Refused when the command line is parsed, before any work (review finding 6).
+  const RunResult r = identify(good_spectrum(64), {"--json", out});
+  EXPECT_TRUE(IsBadInput(r, {"--json", out, "does not exist"}));
+  EXPECT_EQ(r.out, "");
   EXPECT_TRUE(files_ending_with(dir_, ".tmp-fdsid").empty());
 }
 
@@ -673,11 +687,42 @@ TEST_F(Cli, CheckNamesAFactorWithAZeroOutsideTheUnitCircle) {
   EXPECT_NEAR(k.at("factor").at("zero_distance").get<double>(), 1.5, 1e-12);
 }
 
+// Review finding 17: a candidate of the wrong order made the reference fail at
+// step 6 and `check` exit 2 (bad input); for an implementer it is the answer
+// "the orders differ".
+TEST_F(Cli, CheckCallsAWrongOrderOrAnUnstableCandidateADisagreement) {
+  const std::string g1 = write("g1.json", R"({"domain":"discrete","sample_time":1,"A":[[0.8]],"B":[[1]],"C":[[0.3]],"D":[[1]]})");
+  const std::string data = path("g1.csv");
+  ASSERT_TRUE(Succeeded(run_fdsid({"sample-spectrum", "--model", g1, "--M", "32", "--precision", "high", "--out", data})));
+  const std::string four = kPaperModel;  // order 4
+  const RunResult r = run_fdsid({"check", "--model", four, "--data", data});
+  EXPECT_EQ(r.status, 1) << describe(r);
+  EXPECT_NE(r.out.find("the reference fails at the candidate's order 4 (step "), std::string::npos) << describe(r);
+  EXPECT_NE(r.out.find("the data support order 1"), std::string::npos) << describe(r);
+  EXPECT_NE(r.out.find("orders differ: candidate 4, reference 1\n"), std::string::npos) << describe(r);
+  EXPECT_NE(r.out.find("DISAGREES"), std::string::npos) << describe(r);
+  // An unstable candidate of the right order is a disagreement too (it was exit 2).
+  const std::string unstable =
+      write("unstable.json", R"({"domain":"discrete","sample_time":1,"A":[[1.25]],"B":[[1]],"C":[[0.3]],"D":[[1]]})");
+  const RunResult u = run_fdsid({"check", "--model", unstable, "--data", data});
+  EXPECT_EQ(u.status, 1) << describe(u);
+  EXPECT_NE(u.out.find("candidate: unstable, a pole of modulus 1.25 (a spectral factor is stable; the reference's "
+                       "largest pole modulus is 0.8)"),
+            std::string::npos)
+      << describe(u);
+}
+
+// Review finding 14: a stable continuous-time model was called unstable (|s| > 1).
+TEST_F(CliModel, SampleSpectrumNamesAContinuousTimeModel) {
+  const std::string c4 = std::string(FDSID_SOURCE_DIR) + "/fixtures/systems/continuous4.json";
+  EXPECT_TRUE(IsBadInput(sample(c4), {"continuous4.json", "continuous-time model", "discrete-time one"}));
+}
+
 TEST_F(Cli, CheckRefusesBadCandidates) {
   const std::string data = good_spectrum(32);
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", path("none.json"), "--data", data}), {"none.json"}));
-  const std::string nonsquare = write("ns.json", R"({"A":[[0.5]],"B":[[1,1]],"C":[[1]],"D":[[1,0]]})");
+  const std::string nonsquare = write("ns.json", R"({"domain":"discrete","sample_time":1,"A":[[0.5]],"B":[[1,1]],"C":[[1]],"D":[[1,0]]})");
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", nonsquare, "--data", data}), {"square"}));
-  const std::string badp = write("bp.json", R"({"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]],"p":-3})");
+  const std::string badp = write("bp.json", R"({"domain":"discrete","sample_time":1,"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]],"p":-3})");
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", badp, "--data", data}), {"\"p\""}));
 }

@@ -16,6 +16,7 @@
 #include "fdsid/error.hpp"
 #include "fdsid/frf_id.hpp"
 #include "fdsid/paper.hpp"
+#include "fdsid/simulate.hpp"
 #include "frf_tolerance.hpp"
 #include "tolerance.hpp"
 
@@ -446,6 +447,38 @@ TEST(RecordStatistics, SteadyStatePeriodicRecordMatchesFrequencyResponse) {
   var_ratio /= F;
   EXPECT_NEAR(var_ratio, 1.0, 5 / std::sqrt(double(F) * (M - 1)));
   std::cout << "  [measured] worst |G^ - G0| / tol = " << worst << ", mean sigma^2_Y / sigma^2 = " << var_ratio << "\n";
+}
+
+// require_input_power on both of its floors: the noise floor (input noise of
+// std 0.05: a line without input has |U|^2 / (s^2_U / M) ~ F(2, 14)) and the
+// rounding floor (a noise-free input: unexcited lines at ~1e-32 of the energy).
+// The odd multisine has |U_k|^2 ~ P/(2*64) = 2 per line against a noise
+// variance 0.0025/M: the right lines are never quiet. Shifted by one, each
+// listed line is quiet with probability 0.99; more than half of 63 fail to be
+// quiet with probability < 1e-60.
+TEST(RecordStatistics, ListedLinesWithoutInputPowerAreRefused) {
+  for (double input_noise : {0.05, 0.0}) {
+    RecordOptions o;
+    o.period = 256;
+    o.periods = 8;
+    for (int k = 1; k < 128; k += 2) o.lines.push_back(k);
+    o.output_noise_std = 0.05;
+    o.input_noise_std = input_noise;
+    o.seed = 5;
+    RecordMeta meta;
+    const Eigen::MatrixXd rec = simulate_periodic_record(eq36(), o, meta);
+    EXPECT_NO_THROW(require_input_power(rec, 1, meta)) << "input noise " << input_noise;
+    RecordMeta shifted = meta;
+    shifted.excited_lines.clear();
+    for (int k : meta.excited_lines) shifted.excited_lines.push_back(k + 1);  // even lines 2 ... 128
+    try {
+      require_input_power(rec, 1, shifted);
+      ADD_FAILURE() << "shifted lines accepted, input noise " << input_noise;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Input);
+      EXPECT_NE(std::string(e.what()).find("listed lines carry no input power"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(RecordStatistics, ContinuousDomainLinesAreInRadiansPerSecond) {

@@ -1,7 +1,10 @@
 // Model JSON and spectrum CSV readers of the contracts.
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "fdsid/error.hpp"
 #include "fdsid/io.hpp"
@@ -31,14 +34,36 @@ TEST(ModelJson, RoundTripsExactly) {
 }
 
 TEST(ModelJson, RejectsMalformedModels) {
-  const char* bad[] = {
-      R"({"A":[[1]],"B":[[1]],"C":[[1]]})",                         // no D
-      R"({"A":[[1,2]],"B":[[1]],"C":[[1]],"D":[[1]]})",             // A not square
-      R"({"A":[["x"]],"B":[[1]],"C":[[1]],"D":[[1]]})",             // not a number
-      R"({"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1,2]]})",           // D shape
-      R"({"domain":"hybrid","A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]]})",
-      R"([1,2])"};
-  for (const char* text : bad) EXPECT_THROW(model_from_json(nlohmann::json::parse(text), "m.json"), Error) << text;
+  // Each text is a valid model but for the one defect named beside it, and the
+  // message must name that defect (not merely throw).
+  const struct {
+    const char* text;
+    const char* names;
+  } bad[] = {
+      {R"({"domain":"discrete","sample_time":1,"A":[[1]],"B":[[1]],"C":[[1]]})", "field \"D\" is missing"},
+      {R"({"domain":"discrete","sample_time":1,"A":[[1,2]],"B":[[1]],"C":[[1]],"D":[[1]]})", "square"},
+      {R"({"domain":"discrete","sample_time":1,"A":[["x"]],"B":[[1]],"C":[[1]],"D":[[1]]})", "not a decimal number"},
+      {R"({"domain":"discrete","sample_time":1,"A":[["0x10"]],"B":[[1]],"C":[[1]],"D":[[1]]})", "hexadecimal"},
+      {R"({"domain":"discrete","sample_time":1,"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1,2]]})", "D"},
+      {R"({"domain":"hybrid","sample_time":1,"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]]})", "hybrid"},
+      // Review finding 10: a model without domain or sample time was taken as discrete with Ts = 1.
+      {R"({"sample_time":1,"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]]})", "field \"domain\": is missing"},
+      {R"({"domain":"discrete","A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]]})", "field \"sample_time\": is missing"},
+      {R"([1,2])", "JSON object"}};
+  for (const auto& c : bad) {
+    try {
+      model_from_json(nlohmann::json::parse(c.text), "m.json");
+      ADD_FAILURE() << "accepted: " << c.text;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(c.names), std::string::npos) << c.text << " -> " << e.what();
+    }
+  }
+}
+
+TEST(ModelJson, AContinuousModelNeedsNoSampleTime) {
+  const StateSpace m = model_from_json(
+      nlohmann::json::parse(R"({"domain":"continuous","A":[[-1]],"B":[[1]],"C":[[1]],"D":[[0]]})"));
+  EXPECT_EQ(m.domain, Domain::Continuous);
 }
 
 TEST(SpectrumCsv, ReadsScalarAndMimoLayouts) {
@@ -50,11 +75,41 @@ TEST(SpectrumCsv, ReadsScalarAndMimoLayouts) {
 
   std::istringstream s2(
       "omega,S11_re,S11_im,S12_re,S12_im,S21_re,S21_im,S22_re,S22_im\n"
-      "0,1,0,2,0,3,0,4,0\n3.141592653589793,5,0,6,0,7,0,8,0\n");
+      "0,5,0,2,1,2,-1,4,0\n3.141592653589793,6,0,1,3,1,-3,7,0\n");
   const SpectrumData d2 = parse_spectrum_csv(s2, "s.csv");
   EXPECT_EQ(d2.m, 2);
-  EXPECT_EQ(d2.at(0, 1, 0), cplx(2, 0));  // S12: row 1, column 2
-  EXPECT_EQ(d2.at(1, 0, 1), cplx(7, 0));  // S21
+  EXPECT_EQ(d2.at(0, 1, 0), cplx(2, 1));   // S12: row 1, column 2
+  EXPECT_EQ(d2.at(1, 0, 1), cplx(1, -3));  // S21
+}
+
+// Review finding 8: data/mimo2x2_M64.csv with the sign of S21_im flipped was
+// accepted and identified with twice the order.
+TEST(SpectrumCsv, RefusesANonHermitianMimoSpectrum) {
+  std::ifstream f(std::string(FDSID_SOURCE_DIR) + "/data/mimo2x2_M64.csv");
+  std::string header, line;
+  std::getline(f, header);
+  std::ostringstream good_text, bad_text;
+  good_text << header << '\n';
+  bad_text << header << '\n';
+  while (std::getline(f, line)) {
+    good_text << line << '\n';
+    std::vector<std::string> cells;
+    std::istringstream row(line);
+    for (std::string c; std::getline(row, c, ',');) cells.push_back(c);
+    // S21_im is column 7 (omega, S11 re/im, S12 re/im, S21 re/im, ...).
+    if (cells[6] != "0") cells[6] = cells[6][0] == '-' ? cells[6].substr(1) : "-" + cells[6];
+    for (size_t i = 0; i < cells.size(); ++i) bad_text << (i ? "," : "") << cells[i];
+    bad_text << '\n';
+  }
+  std::istringstream good(good_text.str()), bad(bad_text.str());
+  EXPECT_EQ(parse_spectrum_csv(good, "mimo.csv").m, 2);
+  try {
+    parse_spectrum_csv(bad, "flipped.csv");
+    ADD_FAILURE() << "a non-Hermitian spectrum was accepted";
+  } catch (const Error& e) {
+    // Line 2 (omega = 0) has S12_im = 0; line 3 is the first with a flipped sign.
+    EXPECT_NE(std::string(e.what()).find("flipped.csv line 3: S21 is not conj(S12)"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SpectrumCsv, WriteThenReadIsExact) {
@@ -85,7 +140,7 @@ TEST(SpectrumCsv, NamesTheLineAndWhatIsWrong) {
   expect_error("omega,S_re,S_im\n0,1,0\n3.141592653589793,1\n", ErrorKind::Input, "line 3");
   expect_error("omega,S_re,S_im\n0,1,0\n3.141592653589793,nan,0\n", ErrorKind::Input, "not finite");
   expect_error("omega,S_re,S_im\n0,1,0\n3.141592653589793,inf,0\n", ErrorKind::Input, "not finite");
-  expect_error("omega,S_re,S_im\n0,1,0\n3.141592653589793,1x,0\n", ErrorKind::Input, "not a number");
+  expect_error("omega,S_re,S_im\n0,1,0\n3.141592653589793,1x,0\n", ErrorKind::Input, "not a decimal number");
   expect_error("omega,S_re,S_im\n0,1,0\n1.5,1,0\n3.141592653589793,1,0\n", ErrorKind::Grid, "uniform grid");
   expect_error("omega,S11_re,S11_im,S12_re,S12_im,S21_re,S21_im\n", ErrorKind::Input, "not m*m");
 }

@@ -199,6 +199,32 @@ TEST(VanOverschee1997, LosesTheAntiCausalHalfAsNGrows) {
   }
 }
 
+// Review finding 18: --order 8 on noise-free order-4 data failed at step 6
+// without saying where the singular values have their gap, and --order 100
+// listed 200 moduli in one line.
+TEST(Failures, AStep6FailureAtAGivenOrderNamesTheLargestGap) {
+  const StateSpace sys = akcay_example_system();
+  SpectrumOptions o;
+  o.order = 8;
+  try {
+    identify_spectrum(noise_free(sys, 128), o);
+    ADD_FAILURE() << "order 8 on order-4 data did not fail";
+  } catch (const Error& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("the largest singular-value gap is at order 4 (sigma_8/sigma_9 = "), std::string::npos) << w;
+    EXPECT_NE(w.find("the given order 8 has sigma_16/sigma_17 = "), std::string::npos) << w;
+  }
+  o.order = 40;
+  try {
+    identify_spectrum(noise_free(sys, 512), o);
+    ADD_FAILURE() << "order 40 on order-4 data did not fail";
+  } catch (const Error& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("the 12 nearest the circle"), std::string::npos) << w;
+    EXPECT_LT(w.size(), 600u) << w;
+  }
+}
+
 TEST(Failures, SplitFailureOfVanOversheeOnNoisyDataNamesStep6) {
   // Akçay (2011) Section 4: vo1997 with p = r = 50 on data with ε = 1e-9 fails at step 6.
   const StateSpace sys = akcay_example_system();

@@ -85,8 +85,8 @@ ModelComparison compare_models(const StateSpace& cand, const StateSpace& ref, in
   c.reference_order = ref.order();
   const Eigen::VectorXcd pc = poles(cand), pr = poles(ref);
   c.pole_distance = hausdorff(pc, pr);
-  if (pc.size() && pc.cwiseAbs().maxCoeff() >= 1.0)
-    throw Error(ErrorKind::Input, "candidate", "is not stable (pole modulus " + std::to_string(pc.cwiseAbs().maxCoeff()) + ")");
+  if (pc.size()) c.candidate_pole_modulus = pc.cwiseAbs().maxCoeff();
+  if (pr.size()) c.reference_pole_modulus = pr.cwiseAbs().maxCoeff();
 
   double scale = 0;
   for (int k = 0; k < grid; ++k) {
@@ -102,11 +102,18 @@ ModelComparison compare_models(const StateSpace& cand, const StateSpace& ref, in
   }
   c.spectrum_error /= scale;
 
-  const SpectralSummands sc = spectral_summands(cand), sr = spectral_summands(ref);
   const int K = markov > 0 ? markov : 2 * std::max(cand.order(), ref.order()) + 1;
-  // R(0) = E, R(k) = C A^{k-1} F
-  std::tie(c.markov_error, c.markov_error_k) =
-      markov_distance({sc.E, sc.C, sc.A, sc.F}, {sr.E, sr.C, sr.A, sr.F}, K);
+  if (c.candidate_unstable()) {
+    // An unstable candidate is a disagreement (a spectral factor is stable),
+    // not bad input: its spectrum, zeros and H(k) are still compared; the
+    // summands (a Stein equation in A) do not exist, so their distance is +inf.
+    c.markov_error = std::numeric_limits<double>::infinity();
+  } else {
+    const SpectralSummands sc = spectral_summands(cand), sr = spectral_summands(ref);
+    // R(0) = E, R(k) = C A^{k-1} F
+    std::tie(c.markov_error, c.markov_error_k) =
+        markov_distance({sc.E, sc.C, sc.A, sc.F}, {sr.E, sr.C, sr.A, sr.F}, K);
+  }
   compare_factors(cand, ref, K, c);
   return c;
 }

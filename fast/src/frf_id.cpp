@@ -675,6 +675,7 @@ FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
   int order_r = o.r;
   Eigen::VectorXd order_sigma;
   double edge = 0;
+  std::string capped;  // the automatic order stopped at the top of its range
   if (order == 0) {
     if (order_r == 0) order_r = std::min(20, r_feasible);
     if (order_r < 2)
@@ -692,6 +693,15 @@ FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
       edge = std::pow(1 + std::sqrt(gamma), 2);
       order = 0;
       while (order < n_max && order_sigma(order) * order_sigma(order) > 2 * edge) ++order;
+      // Review finding 4: on real data (model error above the noise) the
+      // order stopped at the cap and was reported as "read from the singular
+      // values". Say so when σ_{n_max+1} is still above the noise level too.
+      if (order == n_max && n_max < order_sigma.size() && order_sigma(n_max) * order_sigma(n_max) > 2 * edge)
+        capped = "order " + std::to_string(order) + " is the top of the searched range (n <= " +
+                 std::to_string(n_max) + " at r = " + std::to_string(order_r) +
+                 "), not where the singular values reach the noise level (sigma_" + std::to_string(n_max + 1) +
+                 "^2 = " + fmt(order_sigma(n_max) * order_sigma(n_max), 3) + " > 2 x edge " + fmt(2 * edge, 3) +
+                 "): the data need a larger --max-order (and --r), or the noise model is too optimistic";
       if (order == 0)
         fail(ErrorKind::Order, "order", "no singular value of step 1c rises above the noise level (largest " +
                                             fmt(order_sigma(0) * order_sigma(0), 3) + " vs edge " + fmt(edge, 3) +
@@ -744,6 +754,7 @@ FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
     best.order_r = order_r;
   }
   best.noise_edge = edge;
+  if (!capped.empty()) best.warnings.push_back(capped);
   return best;
 }
 
@@ -820,6 +831,52 @@ SampleStatistics sample_statistics(Domain domain, const Eigen::VectorXd& omega,
   return st;
 }
 
+void require_input_power(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta) {
+  const int M = meta.periods, F = static_cast<int>(meta.excited_lines.size());
+  if (M < 2 || F == 0 || inputs < 1) return;  // nothing to judge by; the callers refuse these cases
+  const Eigen::MatrixXd u = samples.leftCols(inputs);
+  const auto sp = period_spectra(u, meta.period, M, meta.excited_lines);
+  // Rounding floor: an unexcited line of a noise-free input keeps
+  // |U|^2 ~ (u log2 P)^2 E (E = energy of one period, Parseval), < 1e-29 E for
+  // P <= 2^24; an excited line of a multisine over at most P/2 lines has
+  // |U|^2 >= E/P >= 6e-8 E. 1e-20 E lies far from both.
+  const double energy = u.squaredNorm() / M;
+  // Noise floor: on a line without input, |mean U|^2 / (s^2_U / M) is F(2, 2M-2)
+  // distributed (Gaussian noise; mean and sample variance independent), whose
+  // survival function is (1 + t/(M-1))^{-(M-1)}: its upper 1 % point q.
+  const double q = (M - 1) * (std::pow(0.01, -1.0 / (M - 1)) - 1);
+  int quiet = 0, first_quiet = -1;
+  double first_ratio = 0;
+  for (int j = 0; j < F; ++j) {
+    bool powered = false;
+    double best = 0;
+    for (int i = 0; i < inputs; ++i) {
+      cplx mean = 0;
+      for (int l = 0; l < M; ++l) mean += sp[l][j](i);
+      mean /= double(M);
+      double var = 0;
+      for (int l = 0; l < M; ++l) var += std::norm(sp[l][j](i) - mean);
+      var /= (M - 1);
+      const double power = std::norm(mean);
+      const double ratio = var > 0 ? power / (var / M) : std::numeric_limits<double>::infinity();
+      best = std::max(best, ratio);
+      if (power > 1e-20 * energy && ratio > q) powered = true;
+    }
+    if (!powered && ++quiet == 1) first_quiet = meta.excited_lines[j], first_ratio = best;
+  }
+  // A line of a meta that lists the right lines is quiet with probability
+  // <= 1 % (noise alone) or never (an excited line); more than half of them
+  // quiet is a meta that lists the wrong lines (0-based, shifted, another
+  // period).
+  if (2 * quiet > F)
+    fail(ErrorKind::Input, "meta field \"excited_lines\"",
+         std::to_string(quiet) + " of the " + std::to_string(F) +
+             " listed lines carry no input power (e.g. line " + std::to_string(first_quiet) + ": |U|^2 / (s^2_U / M) = " +
+             sci(first_ratio) + ", below the 1 % point " + sci(q) +
+             " of noise alone): the excitation is on other lines; are the lines 1-based DFT indices k = 1 ... P/2 "
+             "(frequency k / (P Ts))?");
+}
+
 SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta,
                                    Domain domain) {
   if (meta.periods < 2)
@@ -834,6 +891,7 @@ SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, c
     fail(ErrorKind::Input, "meta field \"sample_time\"", "must be positive, got " + fmt(meta.sample_time, 6));
   if (inputs < 1 || inputs >= samples.cols())
     fail(ErrorKind::Input, "data", "needs at least one input and one output column");
+  require_input_power(samples, inputs, meta);
   const auto spectra = period_spectra(samples, meta.period, meta.periods, meta.excited_lines);
   const int F = static_cast<int>(meta.excited_lines.size());
   Eigen::VectorXd omega(F);

@@ -1,6 +1,8 @@
 #include "fdsid/io.hpp"
 
 #include <cerrno>
+#include <charconv>
+#include <cstring>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -10,7 +12,10 @@
 #include <sstream>
 #include <vector>
 
+#include <unistd.h>
+
 #include "fdsid/error.hpp"
+#include "fdsid/format.hpp"
 
 namespace fdsid {
 
@@ -20,22 +25,40 @@ namespace {
   throw Error(ErrorKind::Input, where, what);
 }
 
+// A number of the file formats: [+|-]digits[.digits][(e|E)[+|-]digits], in
+// the C locale. std::from_chars (general format) takes exactly that (no
+// hexadecimal "0x10", no spaces, no decimal comma — strtod took "0x10" as 16)
+// plus inf/nan, which the finiteness test refuses. A magnitude beyond the
+// double range is named as an overflow, one below it is read as strtod reads
+// it (0 or a subnormal).
+double parse_decimal(const std::string& text, const std::string& where) {
+  const char* b = text.data();
+  const char* e = b + text.size();
+  if (b != e && *b == '+') ++b;
+  double x = 0;
+  const auto [end, ec] = std::from_chars(b, e, x, std::chars_format::general);
+  if (text.empty() || end != e || (ec != std::errc() && ec != std::errc::result_out_of_range)) {
+    std::string hint;
+    if (text.find(',') != std::string::npos) hint = " (a decimal comma? write 0.5, not 0,5)";
+    else if (text.find("0x") != std::string::npos || text.find("0X") != std::string::npos)
+      hint = " (hexadecimal is not data)";
+    input_error(where, "\"" + text + "\" is not a decimal number" + hint);
+  }
+  if (ec == std::errc::result_out_of_range) {
+    x = std::strtod(text.c_str(), nullptr);
+    if (std::abs(x) > 1.0) input_error(where, "\"" + text + "\" overflows a double (beyond ±1.8e308)");
+  }
+  if (!std::isfinite(x)) input_error(where, "\"" + text + "\" is not finite (NaN and Inf are not data)");
+  return x;
+}
+
 double number_from_json(const nlohmann::json& v, const std::string& where) {
   if (v.is_number()) {
     const double x = v.get<double>();
     if (!std::isfinite(x)) input_error(where, "not a finite number");
     return x;
   }
-  if (v.is_string()) {
-    const std::string s = v.get<std::string>();
-    char* end = nullptr;
-    errno = 0;
-    const double x = std::strtod(s.c_str(), &end);
-    if (s.empty() || end != s.c_str() + s.size()) input_error(where, "\"" + s + "\" is not a decimal number");
-    if (!std::isfinite(x) || (errno == ERANGE && std::abs(x) > 1.0))
-      input_error(where, "\"" + s + "\" is not a finite double");
-    return x;
-  }
+  if (v.is_string()) return parse_decimal(v.get<std::string>(), where);
   input_error(where, "expected a number or a decimal string, got " + std::string(v.type_name()));
 }
 
@@ -86,11 +109,7 @@ std::vector<std::string> split_csv(const std::string& line) {
 
 double parse_cell(const std::string& cell, const std::string& where) {
   if (cell.empty()) input_error(where, "empty value");
-  char* end = nullptr;
-  const double x = std::strtod(cell.c_str(), &end);
-  if (end != cell.c_str() + cell.size()) input_error(where, "\"" + cell + "\" is not a number");
-  if (!std::isfinite(x)) input_error(where, "\"" + cell + "\" is not finite (NaN and Inf are not data)");
-  return x;
+  return parse_decimal(cell, where);
 }
 
 // The data rows after the header: blank lines skipped, every row split and
@@ -116,14 +135,20 @@ void for_each_csv_row(std::istream& in, const std::string& name, size_t cols, Ro
 StateSpace model_from_json(const nlohmann::json& j, const std::string& where) {
   if (!j.is_object()) input_error(where, "expected a JSON object");
   StateSpace m;
-  if (j.contains("domain")) {
-    if (!j["domain"].is_string()) input_error(where + " field \"domain\"", "must be \"discrete\" or \"continuous\"");
-    const std::string d = j["domain"];
-    if (d == "discrete") m.domain = Domain::Discrete;
-    else if (d == "continuous") m.domain = Domain::Continuous;
-    else input_error(where + " field \"domain\"", "\"" + d + "\" is neither \"discrete\" nor \"continuous\"");
-  }
+  // Both fields are part of the model (the contracts' model format): a model
+  // without them used to be taken silently as discrete with Ts = 1, and a
+  // continuous-time model without "domain" then as an unstable discrete one.
+  if (!j.contains("domain"))
+    input_error(where + " field \"domain\"", "is missing: add \"domain\": \"discrete\" or \"continuous\"");
+  if (!j["domain"].is_string()) input_error(where + " field \"domain\"", "must be \"discrete\" or \"continuous\"");
+  const std::string d = j["domain"];
+  if (d == "discrete") m.domain = Domain::Discrete;
+  else if (d == "continuous") m.domain = Domain::Continuous;
+  else input_error(where + " field \"domain\"", "\"" + d + "\" is neither \"discrete\" nor \"continuous\"");
   if (j.contains("sample_time")) m.sample_time = number_from_json(j["sample_time"], where + " field \"sample_time\"");
+  else if (m.domain == Domain::Discrete)
+    input_error(where + " field \"sample_time\"",
+                "is missing: a discrete-time model needs its sample time in seconds (1.0 when time is counted in samples)");
   m.A = matrix_from_json(j, "A", where);
   m.B = matrix_from_json(j, "B", where);
   m.C = matrix_from_json(j, "C", where);
@@ -197,6 +222,35 @@ nlohmann::json result_to_json(const SpectrumResult& r) {
   return j;
 }
 
+namespace {
+// A power spectrum is Hermitian, S_ba = conj(S_ab), at every sample (a
+// cross-spectrum estimate from data is so by construction); with the sign of
+// one _im column flipped the algorithm would still run and return twice the
+// order. Tolerance: a writer printing d >= 6 significant digits (C's %g, the
+// fewest any common tool prints) rounds each entry by <= 0.5e-5 of itself, and
+// |S_ab| <= sqrt(S_aa S_bb) for a positive semi-definite S (Cauchy-Schwarz),
+// so two entries equal before printing differ by <= 1e-5 sqrt(|S_aa| |S_bb|).
+// The diagonal is not tested: Akcay's (2011) Section 4 noise is complex, so
+// noisy diagonal samples carry an imaginary part by design.
+void check_hermitian(const SpectrumData& d, const std::string& name) {
+  for (int k = 0; k <= d.M; ++k)
+    for (int a = 0; a < d.m; ++a)
+      for (int b = a + 1; b < d.m; ++b) {
+        const double scale = std::sqrt(std::abs(d.at(a, a, k)) * std::abs(d.at(b, b, k)));
+        const double dev = std::abs(d.at(b, a, k) - std::conj(d.at(a, b, k)));
+        if (dev > 1e-5 * scale) {
+          const std::string ab = std::to_string(a + 1) + std::to_string(b + 1);
+          const std::string ba = std::to_string(b + 1) + std::to_string(a + 1);
+          input_error(name + " line " + std::to_string(k + 2),
+                      "S" + ba + " is not conj(S" + ab + ") (|S" + ba + " - conj(S" + ab + ")| = " + sci(dev) +
+                          ", above 1e-5 sqrt(|S" + std::to_string(a + 1) + std::to_string(a + 1) + " S" +
+                          std::to_string(b + 1) + std::to_string(b + 1) + "|) = " + sci(1e-5 * scale) +
+                          "): a power spectrum is Hermitian; check the signs of the _im columns");
+        }
+      }
+}
+}  // namespace
+
 SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
   std::string line;
   if (!std::getline(in, line)) input_error(name, "empty file (expected a header omega,S_re,S_im)");
@@ -242,6 +296,7 @@ SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
       const int a = e / m, b = e % m;  // CSV is row-major; S stores vec() column-major
       d.S(a + m * b, k) = values[static_cast<size_t>(k) * entries + e];
     }
+  check_hermitian(d, name);
   return d;
 }
 
@@ -427,6 +482,19 @@ nlohmann::json meta_to_json(const RecordMeta& meta) {
           {"periods", meta.periods},
           {"sample_time", meta.sample_time},
           {"excited_lines", meta.excited_lines}};
+}
+
+void require_writable_path(const std::string& path, const std::string& option) {
+  if (path == "-") return;
+  namespace fs = std::filesystem;
+  const fs::path target(path);
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    input_error(option, "folder \"" + dir.string() + "\" of \"" + path + "\" does not exist (create it first)");
+  if (fs::is_directory(target, ec)) input_error(option, "\"" + path + "\" is a folder: give a file name");
+  if (access(dir.c_str(), W_OK) != 0)
+    input_error(option, "folder \"" + dir.string() + "\" is not writable (" + std::strerror(errno) + ")");
 }
 
 void write_text_file(const std::string& path, const std::string& text) {

@@ -159,6 +159,7 @@ json to_json(const OracleCheck& k) {
             {"reference_max_zero_modulus", c.reference_zero_modulus},
             {"minimum_phase", !c.candidate_not_minimum_phase()}}},
           {"summary", k.summary()},
+          {"note", k.note},
           {"tolerance",
            {{"spectrum", k.spectrum_tolerance},
             {"poles_and_markov", k.pole_tolerance},

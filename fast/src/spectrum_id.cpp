@@ -495,7 +495,7 @@ Split step6_stable_split(const Eigen::MatrixXd& Atilde, int n) {
   const Eigen::VectorXcd& lambda = sp.lambda;
   const Eigen::MatrixXcd W = sp.V.inverse();  // rows: left eigenvectors with y_i^H x_i = 1
   const double normA = Atilde.norm();
-  std::ostringstream moduli;
+  std::vector<double> moduli;
   for (int i = 0; i < 2 * n; ++i) {
     const double mod = std::abs(lambda(i));
     const double kappa = sp.V.col(i).norm() * W.row(i).norm();  // eigenvalue condition number
@@ -507,14 +507,24 @@ Split step6_stable_split(const Eigen::MatrixXd& Atilde, int n) {
                       fmt(lambda(i).imag(), 10) + "i of A has modulus " + fmt(mod, 12) +
                       ", within its rounding error " + fmt(resolution, 3) + " of the unit circle");
     }
-    moduli << (i ? ", " : "") << fmt(mod, 4);
+    moduli.push_back(mod);
     if (mod < 1.0) sp.stable.push_back(i);
   }
-  if (static_cast<int>(sp.stable.size()) != n)
+  if (static_cast<int>(sp.stable.size()) != n) {
+    // At most 12 moduli, those nearest the circle (--order 100 printed 200).
+    std::sort(moduli.begin(), moduli.end(),
+              [](double a, double b) { return std::abs(std::log(a)) < std::abs(std::log(b)); });
+    const size_t shown = std::min<size_t>(moduli.size(), 12);
+    std::sort(moduli.begin(), moduli.begin() + static_cast<std::ptrdiff_t>(shown));
+    std::ostringstream list;
+    for (size_t i = 0; i < shown; ++i) list << (i ? ", " : "") << fmt(moduli[i], 4);
     throw Error(ErrorKind::Split, "step 6",
                 "no stable/antistable split: " + std::to_string(sp.stable.size()) + " of the 2n = " +
                     std::to_string(2 * n) + " eigenvalues of A lie inside the unit circle, n = " + std::to_string(n) +
-                    " needed (moduli " + moduli.str() + ")");
+                    " needed (moduli " + list.str() +
+                    (shown < moduli.size() ? "; the " + std::to_string(shown) + " nearest the circle" : std::string()) +
+                    ")");
+  }
   return sp;
 }
 
@@ -758,6 +768,30 @@ void accuracy_warnings(SpectrumResult& res, int m) {
 
 }  // namespace
 
+// Step 6 for a given order, with the order the singular values support named
+// when the split fails (review finding 18: "--order 8" on order-4 data failed
+// at step 6 without saying that sigma_9 ... sit at rounding level).
+Split step6_with_order_hint(const Eigen::MatrixXd& Atilde, int n, const Order& order, const Eigen::VectorXd& sv,
+                            const Dims& d) {
+  try {
+    return step6_stable_split(Atilde, n);
+  } catch (const Error& e) {
+    if (order.from_data) throw;
+    int gap_index = 0;
+    double gap_ratio = 0;
+    const int n_data = order_from_singular_values(sv, std::min((d.p - 1) / 2, d.r / 2), gap_index, gap_ratio);
+    if (n_data == n || n_data == 0) throw;
+    // Facts, not a diagnosis: where the largest gap of the singular values
+    // lies, and the gap at the given order.
+    throw Error(e.kind(), e.where(),
+                e.message() + "; the largest singular-value gap is at order " + std::to_string(n_data) + " (sigma_" +
+                    std::to_string(gap_index) + "/sigma_" + std::to_string(gap_index + 1) + " = " +
+                    fmt(gap_ratio, 3) + "), the given order " + std::to_string(n) + " has sigma_" +
+                    std::to_string(2 * n) + "/sigma_" + std::to_string(2 * n + 1) + " = " + fmt(order.gap_ratio, 3) +
+                    " (--order auto reads the order there)");
+  }
+}
+
 SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions& opt) {
   const Dims d = check_input(data, opt);
   SpectrumResult res;
@@ -780,7 +814,7 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
   const Eigen::MatrixXd U2n = range.U.leftCols(2 * n);
 
   const Eigen::MatrixXd Atilde = step5_shift_equations(U2n, d.m);
-  const Split split = step6_stable_split(Atilde, n);
+  const Split split = step6_with_order_hint(Atilde, n, order, res.singular_values, d);
   res.split_margin = split.margin;
   const StableRealization sr = step7_A_C(split, U2n, d.m, n);
 

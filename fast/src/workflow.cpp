@@ -58,6 +58,11 @@ std::string frf_method_name(Domain domain, ContinuousMethod method) {
 }
 
 void require_spectrum_model(const StateSpace& model, const std::string& where) {
+  // Checked first: a stable continuous-time model has poles of any modulus,
+  // and the unit-circle test below would call it unstable.
+  if (model.domain != Domain::Discrete)
+    throw Error(ErrorKind::Input, where,
+                "is a continuous-time model: a power spectrum on the grid pi(k-1)/M needs a discrete-time one");
   if (model.order() > 0) {
     const double rho = poles(model).cwiseAbs().maxCoeff();
     if (!(rho < 1.0))
@@ -100,8 +105,14 @@ void set_oracle_tolerances(OracleCheck& check, const StateSpace& reference, int 
 
 std::string OracleCheck::summary() const {
   const ModelComparison& c = comparison;
-  std::string out = orders_agree() ? "" : "orders differ: candidate " + std::to_string(c.candidate_order) +
-                                              ", reference " + std::to_string(c.reference_order) + "\n";
+  std::string out = note.empty() ? "" : note + "\n";
+  if (!orders_agree())
+    out += "orders differ: candidate " + std::to_string(c.candidate_order) + ", reference " +
+           std::to_string(c.reference_order) + "\n";
+  if (c.candidate_unstable())
+    out += "candidate: unstable, a pole of modulus " + fmt(c.candidate_pole_modulus, 6) +
+           " (a spectral factor is stable; the reference's largest pole modulus is " +
+           fmt(c.reference_pole_modulus, 6) + ")\n";
   if (c.candidate_not_minimum_phase() && !factor_agrees())
     out += "factor: zero " + fmt(std::abs(c.candidate_worst_zero), 4) +
            " outside the unit circle; the minimum-phase factor has it at " +

@@ -207,16 +207,21 @@ std::string to_decimal(const Real& x, int digits) {
 Model model_from_json(const json& j) {
   if (!j.is_object()) throw InputError("model: expected a JSON object");
   Model model;
-  if (j.contains("domain")) {
-    if (!j.at("domain").is_string()) throw InputError("model: field \"domain\" must be a string");
-    model.domain = j.at("domain").get<std::string>();
-    if (model.domain != "discrete" && model.domain != "continuous")
-      throw InputError("model: field \"domain\" must be \"discrete\" or \"continuous\", got \"" +
-                       model.domain + "\"");
-  }
+  // "domain" always, "sample_time" for a discrete-time model: both are part of
+  // the model format (none is assumed).
+  if (!j.contains("domain"))
+    throw InputError("model: field \"domain\" is missing: add \"domain\": \"discrete\" or \"continuous\"");
+  if (!j.at("domain").is_string()) throw InputError("model: field \"domain\" must be a string");
+  model.domain = j.at("domain").get<std::string>();
+  if (model.domain != "discrete" && model.domain != "continuous")
+    throw InputError("model: field \"domain\" must be \"discrete\" or \"continuous\", got \"" +
+                     model.domain + "\"");
   if (j.contains("sample_time")) {
     model.sample_time = json_to_real(j.at("sample_time"), "model: field \"sample_time\"");
     if (!(model.sample_time > 0)) throw InputError("model: field \"sample_time\" must be positive");
+  } else if (model.domain == "discrete") {
+    throw InputError("model: field \"sample_time\" is missing: a discrete-time model needs its sample time "
+                     "in seconds (1.0 when time is counted in samples)");
   }
   model.A = matrix_field(j, "A");
   model.B = matrix_field(j, "B");

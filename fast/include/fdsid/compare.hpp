@@ -18,6 +18,11 @@ struct ModelComparison {
   int candidate_order = 0, reference_order = 0;
   /// Hausdorff distance between the pole sets (each pole to the nearest of the other set).
   double pole_distance = 0;
+  /// Largest pole modulus of each model (0 for order 0).
+  double candidate_pole_modulus = 0, reference_pole_modulus = 0;
+  /// A spectral factor is stable; an unstable candidate disagrees (its
+  /// summands' distance is +inf: they do not exist).
+  bool candidate_unstable() const { return candidate_pole_modulus >= 1.0; }
   /// max over the grid of ||S_c - S_r||_F / max ||S_r||_F.
   double spectrum_error = 0;
   double spectrum_error_omega = 0;  ///< where it is largest (rad/sample)
@@ -49,7 +54,9 @@ struct ModelComparison {
 /// Compares candidate and reference on `grid` points of [0, π] (ends
 /// included), on the Markov parameters R(0..markov) of their spectral
 /// summands, and their spectral factors: zeros and H(0..markov).
-/// Both models must be discrete, square and stable.
+/// Both models must be discrete and square (else Error(Input)); the reference
+/// stable. An unstable candidate is compared (candidate_unstable(), summand
+/// distance +inf), not refused.
 ModelComparison compare_models(const StateSpace& candidate, const StateSpace& reference, int grid = 4097,
                                int markov = 0 /* 0: 2n + 1 */);
 

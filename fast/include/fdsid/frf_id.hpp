@@ -187,6 +187,15 @@ SampleStatistics sample_statistics(Domain domain, const Eigen::VectorXd& omega,
                                    const std::vector<std::vector<Eigen::VectorXcd>>& U_l,
                                    const std::vector<std::vector<Eigen::VectorXcd>>& Y_l);
 
+/// The listed excited lines must carry the input: throws Error(Input) on
+/// "meta field \"excited_lines\"" when more than half of them are quiet — at
+/// the rounding floor of the record (|Û|² ≤ 1e-20 of one period's energy) or
+/// within the period-to-period noise (|Û|² / (σ̂²_U/M) below the upper 1 %
+/// point of F(2, 2M−2), its law on a line without input) on every input. A
+/// 0-based or shifted list of an odd multisine fails so; the right list never
+/// does (each of its lines is quiet with probability ≤ 1 %). M < 2: no test.
+void require_input_power(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta);
+
 /// Periodic input/output record (inputs then outputs as columns) → sample
 /// statistics at the excited lines. ω_k = 2πk/P (discrete, rad/sample) or
 /// 2πk/(P Ts) (continuous, rad/s). Throws Error(Input) naming what is wrong

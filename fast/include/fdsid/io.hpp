@@ -54,6 +54,11 @@ nlohmann::json meta_to_json(const RecordMeta& meta);
 /// singular values (those the order was read from), poles, V_SUB and the r scan.
 nlohmann::json frf_result_to_json(const FrfResult& result, const std::string& method);
 
+/// Checks, before any work, that write_text_file (or a figure) can create
+/// `path`: "-" (stdout) passes; else its folder must exist and be writable and
+/// the path must not be a folder. Throws Error(Input) at `option`.
+void require_writable_path(const std::string& path, const std::string& option);
+
 /// Writes text to path atomically (temporary file in the same folder, then
 /// rename), or to stdout when path is "-".
 void write_text_file(const std::string& path, const std::string& text);

@@ -132,6 +132,9 @@ struct OracleCheck {
   double factor_tolerance = 0, zero_tolerance = 0;  ///< the spectral factor's Markov parameters and zeros
   bool tolerance_given = false;  ///< by the user, instead of the derived rule
   nlohmann::json reference_model;
+  /// Why the reference model has another order than the candidate (the
+  /// reference failed at the candidate's order), or empty.
+  std::string note;
   bool orders_agree() const { return comparison.candidate_order == comparison.reference_order; }
   bool poles_agree() const { return comparison.pole_distance <= pole_tolerance; }
   bool spectrum_agrees() const {
