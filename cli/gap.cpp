@@ -1,4 +1,5 @@
 // fdsid gap and gap-validate: sim-to-real gap diagnosis and its blind validation.
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <sstream>
@@ -24,6 +25,17 @@ struct GapValidateCommand {
 };
 
 std::string band_text(const std::array<double, 2>& b) { return "[" + sci(b[0], 4) + ", " + sci(b[1], 4) + "]"; }
+
+// A p-value below the smallest normal double (it underflowed) is "< 1e-300",
+// not 0 (review finding 21).
+std::string p_text(double p) { return p < 1e-300 ? std::string("< 1e-300") : sci(p); }
+
+// An effect parameter: flags and counts (series, at_input, order) as
+// integers, the rest in scientific notation (they printed as 2.0000e+00).
+std::string parameter_text(double v) {
+  if (v == std::floor(v) && std::abs(v) < 1e6) return std::to_string(static_cast<long long>(v));
+  return sci(v, 4);
+}
 
 // Plot-ready table next to the JSON: frequency, t(k) before and after, flag.
 void write_gap_table(const std::string& path, const GapReport& r) {
@@ -60,8 +72,8 @@ int run_gap(const GapCommand& c) {
   if (r.present.empty()) out << "no significant gap (noise alone at level " << o.alpha << ")\n";
   for (size_t i = 0; i < r.present.size(); ++i) out << (i ? ", " : "") << fdsid::to_string(r.present[i]);
   if (!r.present.empty()) out << "\n";
-  out << "tests: p(gap) " << sci(r.p_gap) << ", p(nonlinearity, " << r.unexcited << " unexcited lines) "
-      << sci(r.p_nonlinearity) << ", p(leakage) " << sci(r.p_leakage) << "\n";
+  out << "tests: p(gap) " << p_text(r.p_gap) << ", p(nonlinearity, " << r.unexcited << " unexcited lines) "
+      << p_text(r.p_nonlinearity) << ", p(leakage) " << p_text(r.p_leakage) << "\n";
   if (!r.bands.empty()) {
     out << "bands (Hz):";
     for (const auto& b : r.bands) out << " " << band_text(b);
@@ -70,10 +82,10 @@ int run_gap(const GapCommand& c) {
   out << "candidates (each alone):\n";
   for (const EffectFit& f : r.candidates) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "  %-16s gap_after %-10.4g shrink %-8.3f p %-9.2e", fdsid::to_string(f.effect()), f.gap_after,
-                  f.shrink, f.p_value);
+    std::snprintf(buf, sizeof buf, "  %-16s gap_after %-10.4g shrink %-8.3f p %-9s", fdsid::to_string(f.effect()),
+                  f.gap_after, f.shrink, f.p_value < 1e-300 ? "< 1e-300" : sci(f.p_value, 2).c_str());
     out << buf;
-    for (const auto& kv : fdsid::parameter_list(f.parameters)) out << " " << kv.first << "=" << sci(kv.second, 4);
+    for (const auto& kv : fdsid::parameter_list(f.parameters)) out << " " << kv.first << "=" << parameter_text(kv.second);
     out << "\n";
   }
   for (const std::string& n : r.notes) out << "note: " << n << "\n";

@@ -127,11 +127,14 @@ int run(const IdentifyFrfCommand& c) {
       << (source.periods > 0 ? ", M = " + std::to_string(source.periods) + " periods" : std::string())
       << ", r = " << res.r << (o.r == 0 ? " (minimising V_SUB)" : "") << "\n";
   print_poles(out, res.poles);
-  out << "V_SUB = " << sci(res.v_sub)
-      << " (Eq. 35; about F when model and noise model are right, F (M-1)/(M-2) with sample variances)\n";
+  const FitVerdict fit = fit_verdict(res, data, source);
+  if (fit.misfit) res.warnings.push_back(fit.warning());
+  out << fit.summary() << "\n";
   if (c.improper) out << "the model is the inverse system 1/G (improper G, Pintelon 2002 Section 5)\n";
   for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
-  emit_json(c.json_path, to_json(res, method, source));
+  nlohmann::json j = to_json(res, method, source);
+  j["fit"] = to_json(fit);
+  emit_json(c.json_path, j);
   emit_plot(c.plot_path, plot::frf_figure(data, res));
   return 0;
 }

@@ -551,6 +551,13 @@ TEST_F(CliFrf, GapFindsADelayAndPrintsTheVerdict) {
   const RunResult h = run_fdsid({"gap", "--model", model, "--data", path("rec.csv"), "--meta", path("rec.meta.json")});
   ASSERT_TRUE(Succeeded(h));
   EXPECT_NE(h.out.find("verdict: delay"), std::string::npos) << h.out;
+  // Review finding 21: p-values that underflowed printed as 0.000e+00, flags
+  // and orders as 2.0000e+00.
+  if (j["tests"]["p_gap"].get<double>() < 1e-300) EXPECT_NE(h.out.find("p(gap) < 1e-300"), std::string::npos) << h.out;
+  EXPECT_EQ(h.out.find("0.000e+00"), std::string::npos) << h.out;
+  EXPECT_EQ(h.out.find(" 0.00e+00"), std::string::npos) << h.out;
+  EXPECT_EQ(h.out.find("=1.0000e+00"), std::string::npos) << h.out;
+  EXPECT_EQ(h.out.find("=0.0000e+00"), std::string::npos) << h.out;
 }
 
 TEST_F(CliFrf, GapRefusesWhatItCannotUse) {
@@ -629,6 +636,45 @@ TEST_F(CliFrf, AnOrderAtTheTopOfTheSearchedRangeIsSaid) {
   ASSERT_TRUE(Succeeded(lower));
   EXPECT_NE(lower.out.find("warning: order 6 is the top of the searched range (n <= 6 at r = 12)"), std::string::npos)
       << describe(lower);
+}
+
+// Review finding 16: the V_SUB line said "about F when model and noise model
+// are right" whatever V_SUB was, also without a noise model.
+TEST_F(CliFrf, VSubGetsAVerdict) {
+  // The bundled record: the Eq. (36) plant with white output noise, M = 8.
+  const std::string data = std::string(FDSID_SOURCE_DIR) + "/data/pintelon2002_P512_M8.csv";
+  const std::string meta = std::string(FDSID_SOURCE_DIR) + "/data/pintelon2002_P512_M8.meta.json";
+  const RunResult right = run_fdsid({"identify-frf", "--data", data, "--meta", meta, "--order", "4", "--json", "-"});
+  ASSERT_TRUE(Succeeded(right));
+  const json j = json::parse(right.out);
+  EXPECT_TRUE(j.at("fit").at("available").get<bool>());
+  EXPECT_FALSE(j.at("fit").at("misfit").get<bool>()) << j.at("fit").dump();
+  EXPECT_EQ(j.at("fit").at("periods").get<int>(), 8);
+  // Noise G_var understates 5e5-fold: V_SUB ~ 5e5 x its expected value.
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> n01(0.0, 1e-3);
+  std::string text = "omega,G_re,G_im,G_var\n", plain = "omega,G_re,G_im\n";
+  char line[160];
+  for (int k = 1; k <= 100; ++k) {
+    const double w = M_PI * k / 101;
+    const auto g = G_at(pintelon_plant(), std::polar(1.0, w));
+    const double re = g.real() + n01(rng), im = g.imag() + n01(rng);
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,4e-12\n", w, re, im);
+    text += line;
+    std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g\n", w, re, im);
+    plain += line;
+  }
+  const RunResult wrong = run_fdsid({"identify-frf", "--frf", write("optimistic.csv", text), "--order", "4"});
+  ASSERT_TRUE(Succeeded(wrong));
+  EXPECT_NE(wrong.out.find("(100 terms, known variances); z = "), std::string::npos) << describe(wrong);
+  EXPECT_NE(wrong.out.find("warning: the model does not explain the data to the noise level"), std::string::npos)
+      << describe(wrong);
+  const RunResult none = run_fdsid({"identify-frf", "--frf", write("plain.csv", plain), "--order", "4"});
+  ASSERT_TRUE(Succeeded(none));
+  EXPECT_NE(none.out.find("(unit weights: the FRF file has no G_var column, so V_SUB is no fit statistic)"),
+            std::string::npos)
+      << describe(none);
+  EXPECT_EQ(none.out.find("does not explain"), std::string::npos) << describe(none);
 }
 
 // Review finding 49: --eiv-variance without --eiv was silently ignored.

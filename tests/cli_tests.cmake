@@ -19,7 +19,7 @@ fdsid_discover_tests(cli_test LABELS cli unit quick WORKING_DIRECTORY ${PROJECT_
 # fdsid_fast only to compute the test systems' true FRF and poles.
 add_executable(cli_frf_test ${CMAKE_CURRENT_LIST_DIR}/cli_frf_test.cpp)
 target_link_libraries(cli_frf_test PRIVATE fdsid_fast fdsid_test_linalg GTest::gtest_main nlohmann_json::nlohmann_json)
-target_compile_definitions(cli_frf_test PRIVATE FDSID_EXE="$<TARGET_FILE:fdsid>")
+target_compile_definitions(cli_frf_test PRIVATE FDSID_EXE="$<TARGET_FILE:fdsid>" FDSID_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 add_dependencies(cli_frf_test fdsid)
 fdsid_discover_tests(cli_frf_test LABELS cli unit quick WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
 

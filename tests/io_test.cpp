@@ -143,6 +143,35 @@ TEST(SpectrumCsv, NamesTheLineAndWhatIsWrong) {
   expect_error("omega,S_re,S_im\n0,1,0\n3.141592653589793,1x,0\n", ErrorKind::Input, "not a decimal number");
   expect_error("omega,S_re,S_im\n0,1,0\n1.5,1,0\n3.141592653589793,1,0\n", ErrorKind::Grid, "uniform grid");
   expect_error("omega,S11_re,S11_im,S12_re,S12_im,S21_re,S21_im\n", ErrorKind::Input, "not m*m");
+  // Review finding 19: what the message used to hide.
+  expect_error("omega;S_re;S_im\n0;1;0\n", ErrorKind::Input, "the separator is ';'");
+  expect_error("omega\tS_re\tS_im\n0\t1\t0\n", ErrorKind::Input, "the separator is a tab");
+  expect_error("0,1,0\n3.141592653589793,1,0\n", ErrorKind::Input, "holds numbers, not the header row");
+  expect_error("omega,S_re,S_im\n0,1,0\n3.141592653589793,1,2,5\n", ErrorKind::Input, "a decimal comma?");
+  // M = 4 with its last row (omega = pi) lost: named, not "line 3 is off the grid for M = 3".
+  expect_error("omega,S_re,S_im\n0,1,0\n0.78539816339744828,1,0\n1.5707963267948966,1,0\n"
+               "2.3561944901923448,1,0\n",
+               ErrorKind::Grid, "lie on the grid pi(k-1)/M of M = 4 but end at omega = 2.35619, not pi: the last 1 row(s)");
+}
+
+// Review finding 19/32: a UTF-8 byte-order mark, quoted header cells and a
+// trailing comma on every line (the style of every file in ../shared/data)
+// are read as the plain file.
+TEST(Csv, ReadsBomQuotesAndTrailingCommas) {
+  std::istringstream plain("omega,S_re,S_im\n0,2,0\n3.141592653589793,4,0\n");
+  std::istringstream styled("\xEF\xBB\xBF\"omega\",\"S_re\",\"S_im\",\r\n0,2,0,\r\n3.141592653589793,4,0,\r\n");
+  EXPECT_EQ(parse_spectrum_csv(styled, "s.csv").S, parse_spectrum_csv(plain, "p.csv").S);
+  int inputs = 0;
+  std::istringstream rec("\xEF\xBB\xBF\"u\",\"y\",\n1,2,\n3,4,\n");
+  const Eigen::MatrixXd r = parse_records_csv(rec, "r.csv", inputs);
+  EXPECT_EQ(inputs, 1);
+  ASSERT_EQ(r.rows(), 2);
+  EXPECT_EQ(r(1, 1), 4.0);
+  std::istringstream frf("\"omega\",\"G_re\",\"G_im\",\n0.5,1,0,\n1.0,2,0,\n");
+  EXPECT_EQ(parse_frf_csv(frf, "f.csv", Domain::Discrete).frequencies(), 2);
+  // Without a trailing comma in the header, an empty last cell is still an empty value.
+  std::istringstream empty_cell("omega,S_re,S_im\n0,2,\n3.141592653589793,4,0\n");
+  EXPECT_THROW(parse_spectrum_csv(empty_cell, "e.csv"), Error);
 }
 
 }  // namespace

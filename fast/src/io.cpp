@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <set>
 #include <sstream>
 #include <vector>
 
@@ -93,6 +94,8 @@ nlohmann::json matrix_to_json(const Eigen::MatrixXd& M) {
   return a;
 }
 
+// Cells of one CSV line: split at commas, spaces and a CR trimmed, one pair
+// of enclosing double quotes removed ("u","y": the benchmark files' style).
 std::vector<std::string> split_csv(const std::string& line) {
   std::vector<std::string> out;
   std::string cell;
@@ -101,10 +104,48 @@ std::vector<std::string> split_csv(const std::string& line) {
     while (!cell.empty() && (cell.back() == '\r' || cell.back() == ' ')) cell.pop_back();
     size_t b = 0;
     while (b < cell.size() && cell[b] == ' ') ++b;
-    out.push_back(cell.substr(b));
+    cell = cell.substr(b);
+    if (cell.size() >= 2 && cell.front() == '"' && cell.back() == '"') cell = cell.substr(1, cell.size() - 2);
+    out.push_back(cell);
   }
-  if (!line.empty() && line.back() == ',') out.emplace_back();
+  if (!line.empty() && line.back() == ',') out.emplace_back();  // "a,b,\r" already ends in the empty cell "\r"
   return out;
+}
+
+// The header row of a CSV file, read as the files come (review finding 19):
+// a UTF-8 byte-order mark is skipped, a trailing comma (every file in
+// ../shared/data has one) is dropped here and on every row; a semicolon or
+// tab separator and a missing header row are named as such.
+struct CsvHeader {
+  std::vector<std::string> cells;
+  bool trailing_comma = false;
+};
+
+CsvHeader read_csv_header(std::istream& in, const std::string& name, const std::string& expected) {
+  std::string line;
+  if (!std::getline(in, line)) input_error(name, "empty file (expected a header " + expected + ")");
+  if (line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
+  if (line.find(',') == std::string::npos) {
+    const size_t semi = line.find(';'), tab = line.find('\t');
+    if (semi != std::string::npos || tab != std::string::npos)
+      input_error(name + " line 1", std::string("the separator is ") + (semi != std::string::npos ? "';'" : "a tab") +
+                                        ": fdsid reads comma-separated files with a decimal point (expected " +
+                                        expected + ")");
+  }
+  CsvHeader h;
+  h.cells = split_csv(line);
+  if (h.cells.size() > 1 && h.cells.back().empty()) {
+    h.trailing_comma = true;
+    h.cells.pop_back();
+  }
+  if (!h.cells.empty()) {
+    char* end = nullptr;
+    const std::string& c0 = h.cells[0];
+    std::strtod(c0.c_str(), &end);
+    if (!c0.empty() && end == c0.c_str() + c0.size())
+      input_error(name + " line 1", "holds numbers, not the header row: add the header " + expected + " as line 1");
+  }
+  return h;
 }
 
 double parse_cell(const std::string& cell, const std::string& where) {
@@ -116,16 +157,19 @@ double parse_cell(const std::string& cell, const std::string& where) {
 // checked to have the header's `cols` fields, then handed with its place
 // ("NAME line K", lines counted 1-based from the header) to `row`.
 template <class Row>
-void for_each_csv_row(std::istream& in, const std::string& name, size_t cols, Row&& row) {
+void for_each_csv_row(std::istream& in, const std::string& name, const CsvHeader& header, Row&& row) {
+  const size_t cols = header.cells.size();
   std::string line;
   int lineno = 1;
   while (std::getline(in, line)) {
     ++lineno;
     if (line.empty() || line == "\r") continue;
-    const auto cells = split_csv(line);
+    auto cells = split_csv(line);
+    if (header.trailing_comma && cells.size() == cols + 1 && cells.back().empty()) cells.pop_back();
     const std::string where = name + " line " + std::to_string(lineno);
     if (cells.size() != cols)
-      input_error(where, "has " + std::to_string(cells.size()) + " fields, the header has " + std::to_string(cols));
+      input_error(where, "has " + std::to_string(cells.size()) + " fields, the header has " + std::to_string(cols) +
+                             (cells.size() > cols ? " (a decimal comma? write 0.5, not 0,5)" : ""));
     row(cells, where);
   }
 }
@@ -176,8 +220,19 @@ nlohmann::json read_json_file(const std::string& path, const char* what) {
   check_readable_file(path, what);
   std::ifstream f(path);
   if (!f) input_error(path, std::string("cannot open ") + what);
+  // A key given twice in one object was taken silently, the last one winning
+  // (review finding 12): the parser callback keeps the keys of every open object.
+  std::vector<std::set<std::string>> keys;
+  const auto no_duplicates = [&](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+    using E = nlohmann::json::parse_event_t;
+    if (event == E::object_start) keys.emplace_back();
+    else if (event == E::object_end && !keys.empty()) keys.pop_back();
+    else if (event == E::key && !keys.empty() && !keys.back().insert(parsed.get<std::string>()).second)
+      input_error(path, "key \"" + parsed.get<std::string>() + "\" appears twice in one object");
+    return true;
+  };
   try {
-    return nlohmann::json::parse(f);
+    return nlohmann::json::parse(f, no_duplicates);
   } catch (const nlohmann::json::parse_error& e) {
     input_error(path, std::string("malformed JSON: ") + e.what());
   }
@@ -252,9 +307,8 @@ void check_hermitian(const SpectrumData& d, const std::string& name) {
 }  // namespace
 
 SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
-  std::string line;
-  if (!std::getline(in, line)) input_error(name, "empty file (expected a header omega,S_re,S_im)");
-  const auto header = split_csv(line);
+  const CsvHeader csv = read_csv_header(in, name, "omega,S_re,S_im");
+  const auto& header = csv.cells;
   const auto cols = header.size();
   if (cols < 3 || (cols - 1) % 2 != 0 || header[0] != "omega")
     input_error(name + " line 1", "header must be omega,S_re,S_im or omega,S11_re,S11_im,...,Smm_re,Smm_im");
@@ -270,7 +324,7 @@ SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
   }
   std::vector<double> omega;
   std::vector<cplx> values;
-  for_each_csv_row(in, name, cols, [&](const std::vector<std::string>& cells, const std::string& where) {
+  for_each_csv_row(in, name, csv, [&](const std::vector<std::string>& cells, const std::string& where) {
     omega.push_back(parse_cell(cells[0], where + " column omega"));
     for (int e = 0; e < entries; ++e)
       values.emplace_back(parse_cell(cells[1 + 2 * e], where + " column " + header[1 + 2 * e]),
@@ -280,6 +334,18 @@ SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
   SpectrumData d;
   d.m = m;
   d.M = static_cast<int>(omega.size()) - 1;
+  // A uniform grid of step pi/M' that stops short of pi (its last rows lost)
+  // is named as such, not as an off-grid line 3 (review finding 19); the
+  // same 1e-9 pi as the grid test below.
+  const double h = omega[1] - omega[0];
+  const long M_h = h > 0 ? std::lround(M_PI / h) : 0;
+  bool uniform = omega[0] == 0.0 && M_h > d.M && std::abs(M_PI / M_h - h) <= 1e-9 * M_PI;
+  for (int k = 0; uniform && k <= d.M; ++k) uniform = std::abs(omega[k] - M_PI * k / M_h) <= 1e-9 * M_PI;
+  if (uniform)
+    throw Error(ErrorKind::Grid, name,
+                "the " + std::to_string(d.M + 1) + " samples lie on the grid pi(k-1)/M of M = " + std::to_string(M_h) +
+                    " but end at omega = " + fmt(omega[d.M], 6) + ", not pi: the last " +
+                    std::to_string(M_h - d.M) + " row(s) are missing (the grid runs from 0 to pi, M+1 samples)");
   // The uniform-grid methods need omega_k = pi (k-1)/M exactly; ten significant
   // digits (relative 1e-9 of pi) is what a CSV writer printing %.10g keeps.
   for (int k = 0; k <= d.M; ++k) {
@@ -331,9 +397,8 @@ void write_spectrum_csv(std::ostream& out, const SpectrumData& d) {
 }
 
 FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain) {
-  std::string line;
-  if (!std::getline(in, line)) input_error(name, "empty file (expected a header omega,G_re,G_im[,G_var])");
-  const auto header = split_csv(line);
+  const CsvHeader csv = read_csv_header(in, name, "omega,G_re,G_im[,G_var]");
+  const auto& header = csv.cells;
   const bool has_var = header.size() == 4;
   if (!(header.size() == 3 || has_var) || header[0] != "omega" || header[1] != "G_re" || header[2] != "G_im" ||
       (has_var && header[3] != "G_var"))
@@ -341,7 +406,7 @@ FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain) 
   std::vector<double> omega;
   std::vector<Eigen::MatrixXcd> G;
   std::vector<Eigen::MatrixXd> var;
-  for_each_csv_row(in, name, header.size(), [&](const std::vector<std::string>& cells, const std::string& where) {
+  for_each_csv_row(in, name, csv, [&](const std::vector<std::string>& cells, const std::string& where) {
     omega.push_back(parse_cell(cells[0], where + " column omega"));
     G.push_back(Eigen::MatrixXcd::Constant(
         1, 1, cplx(parse_cell(cells[1], where + " column G_re"), parse_cell(cells[2], where + " column G_im"))));
@@ -366,9 +431,8 @@ FrfData read_frf_csv(const std::string& path, Domain domain) {
 }
 
 Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int& inputs) {
-  std::string line;
-  if (!std::getline(in, line)) input_error(name, "empty file (expected a header u,y or u1,...,y1,...)");
-  const auto header = split_csv(line);
+  const CsvHeader csv = read_csv_header(in, name, "u,y or u1,...,y1,...");
+  const auto& header = csv.cells;
   inputs = 0;
   int outputs = 0;
   for (size_t c = 0; c < header.size(); ++c) {
@@ -389,7 +453,7 @@ Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int
   if (inputs < 1 || outputs < 1) input_error(name + " line 1", "needs at least one u and one y column");
   const size_t cols = header.size();
   std::vector<double> values;
-  for_each_csv_row(in, name, cols, [&](const std::vector<std::string>& cells, const std::string& where) {
+  for_each_csv_row(in, name, csv, [&](const std::vector<std::string>& cells, const std::string& where) {
     for (size_t c = 0; c < cols; ++c) values.push_back(parse_cell(cells[c], where + " column " + header[c]));
   });
   const Eigen::Index rows = static_cast<Eigen::Index>(values.size() / cols);
@@ -422,11 +486,17 @@ RecordMeta meta_from_json(const nlohmann::json& j, const std::string& where) {
   RecordMeta m;
   m.period = int_field(j, "period", where);
   m.periods = int_field(j, "periods", where);
-  m.sample_time = j.contains("sample_time") ? number_from_json(j["sample_time"], where + " field \"sample_time\"") : 1.0;
+  // Required, as in the contracts' meta format (review finding 12: a meta
+  // without it was taken as Ts = 1 s).
+  if (!j.contains("sample_time"))
+    input_error(where + " field \"sample_time\"", "is missing: the sample period in seconds (1.0 when time is counted in samples)");
+  m.sample_time = number_from_json(j["sample_time"], where + " field \"sample_time\"");
   if (m.period < 2) input_error(where + " field \"period\"", "must be at least 2, got " + std::to_string(m.period));
   if (m.periods < 1) input_error(where + " field \"periods\"", "must be at least 1, got " + std::to_string(m.periods));
   if (!(m.sample_time > 0)) input_error(where + " field \"sample_time\"", "must be positive");
-  if (!j.contains("excited_lines") || !j["excited_lines"].is_array())
+  if (!j.contains("excited_lines"))
+    input_error(where + " field \"excited_lines\"", "is missing: the DFT lines k = 1 ... P/2 the excitation drives");
+  if (!j["excited_lines"].is_array())
     input_error(where + " field \"excited_lines\"", "must be an array of DFT line indices");
   for (size_t i = 0; i < j["excited_lines"].size(); ++i) {
     const auto& v = j["excited_lines"][i];

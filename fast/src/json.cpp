@@ -52,6 +52,14 @@ json to_json(const FrfResult& result, const std::string& method, const FrfSource
 
 json to_json(const RecordMeta& meta) { return meta_to_json(meta); }
 
+json to_json(const FitVerdict& f) {
+  if (!f.available) return {{"available", false}, {"v_sub", f.v_sub}, {"reason", "no noise model (unit weights)"}};
+  return {{"available", true}, {"v_sub", f.v_sub},   {"terms", f.terms},     {"periods", f.periods},
+          {"expected", f.expected}, {"std", f.std},   {"ratio", f.ratio},     {"z", f.z},
+          {"p_bound", f.p_bound},   {"p_bound_method", "Cantelli: 1 / (1 + z^2)"},
+          {"misfit", f.misfit},     {"summary", f.summary()}};
+}
+
 json to_json(const std::vector<Table1Row>& rows) {
   json j;
   j["source"] = "Akcay (2011) Table 1: 4th and 5th singular values of G_9 F_8 (Eq. 13), noise-free, p = 9, r = 8";

@@ -103,6 +103,44 @@ void set_oracle_tolerances(OracleCheck& check, const StateSpace& reference, int 
   check.zero_tolerance = eigenvalue_condition_number(Az) * check.factor_tolerance;
 }
 
+FitVerdict fit_verdict(const FrfResult& result, const FrfData& data, const FrfSource& source) {
+  FitVerdict f;
+  f.v_sub = result.v_sub;
+  f.available = data.has_noise_model;
+  if (!f.available) return f;
+  f.terms = data.frequencies() * data.outputs() * data.columns();
+  f.periods = source.frf_path.empty() ? source.periods : 0;
+  double mean = 1, var = 1;  // Exp(1): known variance
+  if (f.periods >= 4) {
+    const double d = 2.0 * f.periods - 2;
+    mean = d / (d - 2);
+    var = d * d * d / ((d - 2) * (d - 2) * (d - 4));
+  }
+  f.expected = f.terms * mean;
+  f.std = std::sqrt(f.terms * var);
+  f.ratio = f.v_sub / f.expected;
+  f.z = (f.v_sub - f.expected) / f.std;
+  f.p_bound = f.z > 0 ? 1.0 / (1.0 + f.z * f.z) : 1.0;
+  f.misfit = f.p_bound <= 1e-3;
+  return f;
+}
+
+std::string FitVerdict::summary() const {
+  if (!available)
+    return "V_SUB = " + sci(v_sub) + " (unit weights: the FRF file has no G_var column, so V_SUB is no fit statistic)";
+  return "V_SUB = " + sci(v_sub) + " = " + fmt(ratio, 4) + " x its expected value " + fmt(expected, 5) +
+         " under a right model and noise model (" + std::to_string(terms) + " terms, " +
+         (periods > 0 ? "sample variances over M = " + std::to_string(periods) + " periods" : std::string("known variances")) +
+         "); z = " + fmt(z, 3) + (z > 0 ? ", p <= " + sci(p_bound, 2) + " (Cantelli)" : std::string());
+}
+
+std::string FitVerdict::warning() const {
+  if (!misfit) return "";
+  return "the model does not explain the data to the noise level (V_SUB is " + fmt(ratio, 3) +
+         " times its expected value, p <= " + sci(p_bound, 2) +
+         "): a higher order, a better noise model, or an effect the model lacks (fdsid gap) may explain the rest";
+}
+
 std::string OracleCheck::summary() const {
   const ModelComparison& c = comparison;
   std::string out = note.empty() ? "" : note + "\n";

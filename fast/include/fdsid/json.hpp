@@ -56,5 +56,7 @@ nlohmann::json to_json(const GapValidation& validation);
 /// `check --json`: agree, orders, p, r, method, extension, the three errors,
 /// the tolerances and their rule, and the reference's model.
 nlohmann::json to_json(const OracleCheck& check);
+/// The "fit" object of identify-frf's JSON.
+nlohmann::json to_json(const FitVerdict& fit);
 
 }  // namespace fdsid
