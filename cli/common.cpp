@@ -1,8 +1,10 @@
 #include "common.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <vector>
 
 #include <unistd.h>
 
@@ -30,6 +32,59 @@ bool unknown_subcommand(const CLI::App& app, int argc, char** argv) {
     return true;
   }
   return false;
+}
+
+namespace {
+// Levenshtein distance (insertions, deletions, substitutions).
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diag = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+}  // namespace
+
+std::string unexpected_arguments(const CLI::App& app, int argc, char** argv, const std::string& cli11_message) {
+  // The subcommand (and reproduce's target) named on the command line.
+  const CLI::App* sub = nullptr;
+  std::string name;
+  for (int i = 1; i < argc && i <= 2; ++i) {
+    const CLI::App* parent = sub ? sub : &app;
+    const auto found = parent->get_subcommands([&](const CLI::App* s) { return s->get_name() == argv[i]; });
+    if (found.empty()) break;
+    sub = found.front();
+    name += (name.empty() ? "" : " ") + sub->get_name();
+  }
+  if (sub == nullptr) return cli11_message;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg.rfind("--", 0) != 0) continue;
+    const std::string opt = arg.substr(0, arg.find('='));
+    std::string best;
+    size_t best_d = std::string::npos;
+    bool known = false;
+    for (const CLI::Option* o : sub->get_options()) {
+      for (const std::string& ln : o->get_lnames()) {
+        if ("--" + ln == opt) known = true;
+        // Near: at most one edit per three letters of the name (so --nx is
+        // not taken for --p), and the nearest wins.
+        const size_t d = edit_distance(opt, "--" + ln);
+        if (d <= std::max<size_t>(1, ln.size() / 3) && d < best_d) best_d = d, best = "--" + ln;
+      }
+    }
+    if (known) continue;
+    return "unknown option " + opt + " of " + name + (best.empty() ? "" : " (did you mean " + best + "?)") +
+           "; fdsid " + name + " --help lists them";
+  }
+  return cli11_message;
 }
 
 CLI::Validator order_value() {

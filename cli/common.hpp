@@ -44,6 +44,12 @@ void register_gap(CLI::App& app, Action& chosen);                // gap.cpp (gap
 /// subcommand is required".
 bool unknown_subcommand(const CLI::App& app, int argc, char** argv);
 
+/// The message for arguments CLI11 did not expect: "unknown option --realisations
+/// of reproduce table2 (did you mean --realizations?)" when an argument looks
+/// like an option of the chosen subcommand misspelt (one edit per three letters), else
+/// CLI11's own text.
+std::string unexpected_arguments(const CLI::App& app, int argc, char** argv, const std::string& cli11_message);
+
 // ---------------------------------------------------------------------------
 // Options
 

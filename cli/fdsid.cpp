@@ -34,6 +34,11 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
+  } catch (const CLI::ExtrasError& e) {
+    // CLI11 says "The following arguments were not expected: 3 --realisations"
+    // (reversed, no hint): name the unknown option and the nearest known one.
+    std::cerr << "fdsid: " << unexpected_arguments(app, argc, argv, e.what()) << "\n";
+    return 2;
   } catch (const CLI::ParseError& e) {
     std::cerr << "fdsid: " << e.what() << "\n";
     return 2;

@@ -62,8 +62,12 @@ int run_table2(Table2Command c) {
       << "): failed (at step 6), mean L2 when it returned a model\n";
   for (const auto& r : rows) {
     char line[160];
-    std::snprintf(line, sizeof line, "%7d   %.3e   %.3e   %5d      %d/%d (%d)   %.3e\n", r.M, r.l2, r.linf, r.failures,
-                  r.vo_failures, r.vo_runs, r.vo_split_failures, r.vo_l2);
+    // Every vo1997 run failed: no model, so no mean (it printed "nan").
+    const std::string vo_l2 = r.vo_runs == 0                ? std::string("- (not run)")
+                              : r.vo_failures == r.vo_runs ? std::string("- (none returned)")
+                                                           : sci(r.vo_l2);
+    std::snprintf(line, sizeof line, "%7d   %.3e   %.3e   %5d      %d/%d (%d)   %s\n", r.M, r.l2, r.linf, r.failures,
+                  r.vo_failures, r.vo_runs, r.vo_split_failures, vo_l2.c_str());
     out << line;
   }
   emit_json(c.json_path, to_json(rows, o));

@@ -15,22 +15,42 @@ namespace fdsid::cli {
 namespace {
 
 struct SampleSpectrumCommand {
-  std::string model_path, out_path = "-";
+  std::string model_path, out_path = "-", json_path;
   int M = 0;
   double epsilon = 0;
   std::uint64_t seed = 1;
   Precision precision = Precision::Double;
 };
 
+// The --json record of what was written (the contracts: every subcommand
+// takes --json; review finding 28).
+nlohmann::json summary(const SampleSpectrumCommand& c, int m) {
+  nlohmann::json j = {{"model", c.model_path},
+                      {"out", c.out_path},
+                      {"M", c.M},
+                      {"m", m},
+                      {"samples", c.M + 1},
+                      {"grid", "omega_k = pi (k-1)/M, k = 1 ... M+1 (rad/sample)"},
+                      {"precision", c.precision == Precision::High ? "high (50 digits, 40 written)" : "double"}};
+  if (c.epsilon > 0)
+    j["noise"] = {{"model", "Akcay (2011) Section 4: s_k = eps H(z_k) v_k"}, {"epsilon", c.epsilon}, {"seed", c.seed}};
+  return j;
+}
+
 int run_high(const SampleSpectrumCommand& c) {
   if (c.epsilon != 0) throw Error(ErrorKind::Input, "--epsilon", "noise is only added in double precision");
   if (c.M < 1 || c.M > 100000) throw Error(ErrorKind::Input, "--M", "must be in 1 .. 100000 with --precision high");
   if (c.out_path == "-") throw Error(ErrorKind::Input, "--out", "--precision high writes to a file");
-  return sample_spectrum_high(c.model_path, c.M, c.out_path);
+  const int status = sample_spectrum_high(c.model_path, c.M, c.out_path);
+  if (status == 0 && !c.json_path.empty()) emit_json(c.json_path, summary(c, read_model(c.model_path).outputs()));
+  return status;
 }
 
 int run(const SampleSpectrumCommand& c) {
   refuse_overwrite(c.out_path, {c.model_path}, "--out");
+  refuse_overwrite(c.json_path, {c.model_path, c.out_path}, "--json");
+  if (c.json_path == "-" && c.out_path == "-")
+    throw Error(ErrorKind::Input, "--json", "- (stdout) needs --out FILE: the CSV goes to stdout otherwise");
   if (c.precision == Precision::High) return run_high(c);
   // 10^7 samples make a ~600 MB CSV; beyond that the text file is no way to carry them.
   if (c.M < 1 || c.M > 10000000)
@@ -50,6 +70,7 @@ int run(const SampleSpectrumCommand& c) {
   std::ostringstream s;
   write_spectrum_csv(s, d);
   write_text_file(c.out_path, s.str());
+  emit_json(c.json_path, summary(c, d.m));
   return 0;
 }
 
@@ -63,6 +84,7 @@ void register_sample_spectrum(CLI::App& app, Action& chosen) {
   smp->add_option("--epsilon", c->epsilon, "add Akcay (2011) Section 4 noise of this level");
   smp->add_option("--seed", c->seed, "random seed of the noise");
   smp->add_option("--out", c->out_path, "CSV output (- = stdout)")->check(output_path("--out"));
+  add_json_option(smp, c->json_path, "write what was sampled here (- = stdout, with --out FILE)");
   smp->add_option("--precision", c->precision, "double (default) or high (50-digit reference, 40 digits written)")
       ->transform(choice(kPrecisions, "is not double or high"));
   on_parsed(smp, c, chosen, run);

@@ -376,12 +376,15 @@ TEST_F(CliFrf, ZeroOrNegativeVariance) {
 
 TEST_F(CliFrf, RepeatedFrequency) {
   const std::string f = frf_with_row("rep.csv", "0.5,0.5,0.25,1e-6");
-  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "1"}), {f, "repeats frequency"}));
+  // Row 2 (file line 3) repeats row 1 (file line 2): both file lines named.
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "1"}),
+                         {f + " line 3 column omega", "repeats " + f + " line 2"}));
 }
 
 TEST_F(CliFrf, DiscreteOmegaAbovePi) {
   const std::string f = frf_with_row("pi.csv", "3.2,0.5,0.25,1e-6");
-  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "1"}), {f, "3.2", "outside [0, pi]"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "1"}),
+                         {f + " line 3", "3.2", "outside [0, pi]", "--domain continuous"}));
 }
 
 TEST_F(CliFrf, ContinuousOmegaNotPositive) {
@@ -580,6 +583,9 @@ TEST_F(CliFrf, GapRefusesWhatItCannotUse) {
       "C": [[1], [2]], "D": [[0], [0]]})");
   EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", mimo, "--data", path("rec.csv"), "--meta", path("rec.meta.json")}),
                          {"SISO"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", model, "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
+                                    "--alpha", "5"}),
+                         {"--alpha", "(0, 1)"}));
   json half = json::parse(kPintelonModel);
   half["sample_time"] = 0.5;
   const std::string ts = write("ts05.json", half.dump());
@@ -698,6 +704,24 @@ TEST_F(CliFrf, SimulateRecordsRefusesWhatIdentifyFrfWouldRefuse) {
                          {"pole of modulus 1.1", "no periodic steady state"}));
   EXPECT_FALSE(fs::exists(path("a.csv")));
   EXPECT_FALSE(fs::exists(path("b.csv")));
+  // Review finding 28: --json, as on every subcommand.
+  const RunResult ok = run_fdsid({"simulate-records", "--model", model, "--out", path("c.csv"), "--meta-out",
+                                  path("c.meta.json"), "--period", "64", "--periods", "4", "--json", "-"});
+  ASSERT_TRUE(Succeeded(ok));
+  const json j = json::parse(ok.out);
+  EXPECT_EQ(j.at("samples").get<int>(), 256);
+  EXPECT_EQ(j.at("meta").at("period").get<int>(), 64);
+}
+
+// Review finding 21: three cases printed "subtle or paired nan" and then
+// "targets met", with unformatted medians.
+TEST_F(CliFrf, GapValidateSaysWhatItDidNotTest) {
+  // The schedule's first three cases: two effect-free, one clear (no subtle or paired case).
+  const RunResult r = run_fdsid({"gap-validate", "--cases", "3", "--seed", "3", "--period", "256", "--threads", "2"});
+  ASSERT_TRUE(r.status == 0 || r.status == 1) << describe(r);
+  EXPECT_NE(r.out.find("subtle or paired n/a (no such case)"), std::string::npos) << describe(r);
+  EXPECT_NE(r.out.find("(not tested, no such case: subtle or paired)"), std::string::npos) << describe(r);
+  EXPECT_EQ(r.out.find("nan"), std::string::npos) << describe(r);
 }
 
 TEST_F(CliFrf, GapValidateScoresBlindCases) {

@@ -135,7 +135,7 @@ class Cli : public ::testing::Test {
 
 TEST_F(Cli, SpectrumMissingFile) {
   const std::string missing = path("no-such-file.csv");
-  EXPECT_TRUE(IsBadInput(identify(missing), {missing, "cannot open"}));
+  EXPECT_TRUE(IsBadInput(identify(missing), {missing, "cannot open", "(No such file or directory)"}));
 }
 
 TEST_F(Cli, SpectrumEmptyFile) {
@@ -691,6 +691,23 @@ TEST_F(Cli, CheckNamesAFactorWithAZeroOutsideTheUnitCircle) {
   EXPECT_NEAR(k.at("factor").at("zero_distance").get<double>(), 1.5, 1e-12);
 }
 
+// Review finding 21: CLI11 answered "The following arguments were not expected:
+// 3 --realisations" without a hint.
+TEST_F(Cli, AMisspeltOptionGetsTheNearestName) {
+  EXPECT_TRUE(IsBadInput(run_fdsid({"reproduce", "table2", "--realisations", "3"}),
+                         {"unknown option --realisations of reproduce table2 (did you mean --realizations?)"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-spectrum", "--data", "x.csv", "--nx", "4"}),
+                         {"unknown option --nx of identify-spectrum", "--help"}));
+}
+
+// Review finding 21: a vo1997 column without a model printed "nan".
+TEST_F(Cli, Table2PrintsNoNanForVo1997WithoutAModel) {
+  const RunResult r = run_fdsid({"reproduce", "table2", "--realizations", "3", "--M", "200", "--vo-epsilon", "0"});
+  ASSERT_TRUE(Succeeded(r));
+  EXPECT_NE(r.out.find("- (not run)"), std::string::npos) << describe(r);
+  EXPECT_EQ(r.out.find("nan"), std::string::npos) << describe(r);
+}
+
 // Review finding 20: the README's first command (the bundled noisy spectrum,
 // order 4 read at sigma_8/sigma_9) ended in "a weak mode may have been left
 // out": the noise tail always sits above the rounding estimate. It has no
@@ -727,6 +744,19 @@ TEST_F(Cli, CheckCallsAWrongOrderOrAnUnstableCandidateADisagreement) {
                        "largest pole modulus is 0.8)"),
             std::string::npos)
       << describe(u);
+}
+
+// Review finding 28: the contracts promise --json on every subcommand.
+TEST_F(CliModel, SampleSpectrumWritesItsJson) {
+  const RunResult r = run_fdsid({"sample-spectrum", "--model", kPaperModel, "--M", "8", "--out", path("s8.csv"),
+                                 "--json", "-"});
+  ASSERT_TRUE(Succeeded(r));
+  const json j = json::parse(r.out);
+  EXPECT_EQ(j.at("M").get<int>(), 8);
+  EXPECT_EQ(j.at("samples").get<int>(), 9);
+  EXPECT_EQ(j.at("m").get<int>(), 1);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"sample-spectrum", "--model", kPaperModel, "--M", "8", "--json", "-"}),
+                         {"--json", "--out FILE"}));
 }
 
 // Review finding 14: a stable continuous-time model was called unstable (|s| > 1).

@@ -145,6 +145,8 @@ TEST(SpectrumCsv, NamesTheLineAndWhatIsWrong) {
   expect_error("omega,S11_re,S11_im,S12_re,S12_im,S21_re,S21_im\n", ErrorKind::Input, "not m*m");
   // Review finding 19: what the message used to hide.
   expect_error("omega;S_re;S_im\n0;1;0\n", ErrorKind::Input, "the separator is ';'");
+  expect_error("omega,G_re,G_im,G_var\n0.5,1,0,1\n", ErrorKind::Input, "holds a frequency response");
+  expect_error("u,y\n0.5,1\n", ErrorKind::Input, "holds periodic records");
   expect_error("omega\tS_re\tS_im\n0\t1\t0\n", ErrorKind::Input, "the separator is a tab");
   expect_error("0,1,0\n3.141592653589793,1,0\n", ErrorKind::Input, "holds numbers, not the header row");
   expect_error("omega,S_re,S_im\n0,1,0\n3.141592653589793,1,2,5\n", ErrorKind::Input, "a decimal comma?");

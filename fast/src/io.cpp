@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <vector>
@@ -219,7 +220,7 @@ void check_readable_file(const std::string& path, const char* what) {
 nlohmann::json read_json_file(const std::string& path, const char* what) {
   check_readable_file(path, what);
   std::ifstream f(path);
-  if (!f) input_error(path, std::string("cannot open ") + what);
+  if (!f) input_error(path, std::string("cannot open ") + what + " (" + std::strerror(errno) + ")");
   // A key given twice in one object was taken silently, the last one winning
   // (review finding 12): the parser callback keeps the keys of every open object.
   std::vector<std::set<std::string>> keys;
@@ -310,6 +311,11 @@ SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
   const CsvHeader csv = read_csv_header(in, name, "omega,S_re,S_im");
   const auto& header = csv.cells;
   const auto cols = header.size();
+  if (cols >= 3 && header[0] == "omega" && header[1] == "G_re")
+    input_error(name + " line 1", "holds a frequency response (omega,G_re,G_im...), not a power spectrum: "
+                                  "identify-frf --frf reads it");
+  if (cols >= 2 && header[0] == "u")
+    input_error(name + " line 1", "holds periodic records (u,y...), not a power spectrum: identify-frf --data reads them");
   if (cols < 3 || (cols - 1) % 2 != 0 || header[0] != "omega")
     input_error(name + " line 1", "header must be omega,S_re,S_im or omega,S11_re,S11_im,...,Smm_re,Smm_im");
   const int entries = static_cast<int>((cols - 1) / 2);
@@ -369,7 +375,7 @@ SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
 SpectrumData read_spectrum_csv(const std::string& path) {
   check_readable_file(path, "spectrum file");
   std::ifstream f(path);
-  if (!f) input_error(path, "cannot open spectrum file");
+  if (!f) input_error(path, std::string("cannot open spectrum file (") + std::strerror(errno) + ")");
   return parse_spectrum_csv(f, path);
 }
 
@@ -406,8 +412,19 @@ FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain) 
   std::vector<double> omega;
   std::vector<Eigen::MatrixXcd> G;
   std::vector<Eigen::MatrixXd> var;
+  std::map<double, std::string> seen;  // omega -> its line, for a repeated frequency
   for_each_csv_row(in, name, csv, [&](const std::vector<std::string>& cells, const std::string& where) {
-    omega.push_back(parse_cell(cells[0], where + " column omega"));
+    const double w = parse_cell(cells[0], where + " column omega");
+    // Checked here, where the file line is known (review finding 21: the
+    // library's check said "frequency 201 ... (data row k is file line k + 1)").
+    if (domain == Domain::Discrete && (w < 0 || w > M_PI))
+      input_error(where + " column omega", "omega = " + fmt(w, 6) +
+                                               " rad/sample is outside [0, pi] (rad/s? give --domain continuous)");
+    if (domain == Domain::Continuous && !(w > 0))
+      input_error(where + " column omega", "omega = " + fmt(w, 6) + " rad/s must be positive for continuous time");
+    const auto [it, fresh] = seen.emplace(w, where);
+    if (!fresh) input_error(where + " column omega", "omega = " + fmt(w, 17) + " repeats " + it->second);
+    omega.push_back(w);
     G.push_back(Eigen::MatrixXcd::Constant(
         1, 1, cplx(parse_cell(cells[1], where + " column G_re"), parse_cell(cells[2], where + " column G_im"))));
     if (has_var) {
@@ -419,14 +436,14 @@ FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain) 
   if (omega.empty()) input_error(name, "no data rows");
   FrfData d = frf_data(domain, Eigen::Map<Eigen::VectorXd>(omega.data(), static_cast<Eigen::Index>(omega.size())), G,
                        var);
-  validate(d, name + " (data row k is file line k + 1)");
+  validate(d, name);
   return d;
 }
 
 FrfData read_frf_csv(const std::string& path, Domain domain) {
   check_readable_file(path, "FRF file");
   std::ifstream f(path);
-  if (!f) input_error(path, "cannot open FRF file");
+  if (!f) input_error(path, std::string("cannot open FRF file (") + std::strerror(errno) + ")");
   return parse_frf_csv(f, path, domain);
 }
 
@@ -465,7 +482,7 @@ Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int
 Eigen::MatrixXd read_records_csv(const std::string& path, int& inputs) {
   check_readable_file(path, "data file");
   std::ifstream f(path);
-  if (!f) input_error(path, "cannot open data file");
+  if (!f) input_error(path, std::string("cannot open data file (") + std::strerror(errno) + ")");
   return parse_records_csv(f, path, inputs);
 }
 
