@@ -29,7 +29,7 @@ std::string band_text(const std::array<double, 2>& b) { return "[" + sci(b[0], 4
 
 // A p-value below the smallest normal double (it underflowed) is "< 1e-300",
 // not 0 (review finding 21).
-std::string p_text(double p) { return p < 1e-300 ? std::string("< 1e-300") : sci(p); }
+std::string p_text(double p, int digits = 3) { return p < 1e-300 ? std::string("< 1e-300") : sci(p, digits); }
 
 // An effect parameter: flags and counts (series, at_input, order) as
 // integers, the rest in scientific notation (they printed as 2.0000e+00).
@@ -84,7 +84,7 @@ int run_gap(const GapCommand& c) {
   for (const EffectFit& f : r.candidates) {
     char buf[160];
     std::snprintf(buf, sizeof buf, "  %-16s gap_after %-10.4g shrink %-8.3f p %-9s", fdsid::to_string(f.effect()),
-                  f.gap_after, f.shrink, f.p_value < 1e-300 ? "< 1e-300" : sci(f.p_value, 2).c_str());
+                  f.gap_after, f.shrink, p_text(f.p_value, 2).c_str());
     out << buf;
     for (const auto& kv : fdsid::parameter_list(f.parameters)) out << " " << kv.first << "=" << parameter_text(kv.second);
     out << "\n";

@@ -666,58 +666,77 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
   return res;
 }
 
+namespace {
+
+// Section 5, the order: read from the step-1c singular values at r = order_r.
+struct AutomaticOrder {
+  int order = 0, order_r = 0;
+  Eigen::VectorXd sigma;  // the singular values it was read from
+  double edge = 0;        // Marchenko–Pastur edge of whitened noise (0 without a noise model)
+  std::string capped;     // a warning when it stopped at the top of its range, else empty
+};
+
+// Purpose: n_a when the options leave it to the data.
+// Method: with a noise model, the count of singular values whose square
+// exceeds twice the Marchenko–Pastur edge (below); without one, the largest
+// gap σ_n/σ_{n+1}; n ≤ n_max = max_order or min(20, r p − 1).
+// Fails: Error(Dimension) with too few frequencies for r = 2; Error(Order)
+// when nothing rises above the noise level.
+AutomaticOrder automatic_order(const FrfData& d, const FrfOptions& o, int r_feasible) {
+  const int F = d.frequencies(), p = d.outputs(), c = d.columns();
+  AutomaticOrder a;
+  a.order_r = o.r > 0 ? o.r : std::min(20, r_feasible);
+  if (a.order_r < 2)
+    fail(ErrorKind::Dimension, "order", "too few frequencies (" + std::to_string(F) + ") to read an order");
+  const int n_max = o.max_order > 0 ? std::min(o.max_order, a.order_r * p - 1) : std::min(20, a.order_r * p - 1);
+  const Eigen::VectorXd& sv = a.sigma = frf_singular_values(d, a.order_r, o.continuous, o.omega_scale);
+  if (d.has_noise_model) {
+    // Whitened noise (C_Y = E[𝐍^re 𝐍^reᵀ]) has squared singular values
+    // spread over the Marchenko–Pastur law of ratio γ = r p / (F c) (F c
+    // complex columns; the Re/Im halves of one column are not independent);
+    // its upper edge (1 + √γ)² is the noise level. A component counts as
+    // model when its square exceeds twice that edge (margin for the
+    // sample-variance weighting and the projection Π).
+    const double gamma = double(a.order_r) * p / (double(F) * c);
+    const double edge = a.edge = std::pow(1 + std::sqrt(gamma), 2);
+    while (a.order < n_max && sv(a.order) * sv(a.order) > 2 * edge) ++a.order;
+    // Review finding 4: on real data (model error above the noise) the
+    // order stopped at the cap and was reported as "read from the singular
+    // values". Say so when σ_{n_max+1} is still above the noise level too.
+    if (a.order == n_max && n_max < sv.size() && sv(n_max) * sv(n_max) > 2 * edge)
+      a.capped = "order " + std::to_string(a.order) + " is the top of the searched range (n <= " +
+                 std::to_string(n_max) + " at r = " + std::to_string(a.order_r) +
+                 "), not where the singular values reach the noise level (sigma_" + std::to_string(n_max + 1) +
+                 "^2 = " + fmt(sv(n_max) * sv(n_max), 3) + " > 2 x edge " + fmt(2 * edge, 3) +
+                 "): the data need a larger --max-order (and --r), or the noise model is too optimistic";
+    if (a.order == 0)
+      fail(ErrorKind::Order, "order", "no singular value of step 1c rises above the noise level (largest " +
+                                          fmt(sv(0) * sv(0), 3) + " vs edge " + fmt(edge, 3) +
+                                          "): the data hold no identifiable dynamics at this noise level");
+  } else {
+    // Without a noise model: the largest gap σ_n / σ_{n+1}, n = 1 … n_max.
+    double best = -1;
+    for (int n = 1; n <= n_max && n < sv.size(); ++n) {
+      const double ratio = sv(n - 1) / std::max(sv(n), sv(0) * kUnitRoundoff);
+      if (ratio > best) {
+        best = ratio;
+        a.order = n;
+      }
+    }
+  }
+  return a;
+}
+
+}  // namespace
+
 FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
   validate(d);
   const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
   // The largest r for which Z has at least as many columns as rows (step 1b).
   const int r_feasible = static_cast<int>(2LL * F * c / (m + p));
-  int order = o.order;
-  int order_r = o.r;
-  Eigen::VectorXd order_sigma;
-  double edge = 0;
-  std::string capped;  // the automatic order stopped at the top of its range
-  if (order == 0) {
-    if (order_r == 0) order_r = std::min(20, r_feasible);
-    if (order_r < 2)
-      fail(ErrorKind::Dimension, "order", "too few frequencies (" + std::to_string(F) + ") to read an order");
-    const int n_max = o.max_order > 0 ? std::min(o.max_order, order_r * p - 1) : std::min(20, order_r * p - 1);
-    order_sigma = frf_singular_values(d, order_r, o.continuous, o.omega_scale);
-    if (d.has_noise_model) {
-      // Whitened noise (C_Y = E[𝐍^re 𝐍^reᵀ]) has squared singular values
-      // spread over the Marchenko–Pastur law of ratio γ = r p / (F c) (F c
-      // complex columns; the Re/Im halves of one column are not independent);
-      // its upper edge (1 + √γ)² is the noise level. A component counts as
-      // model when its square exceeds twice that edge (margin for the
-      // sample-variance weighting and the projection Π).
-      const double gamma = double(order_r) * p / (double(F) * c);
-      edge = std::pow(1 + std::sqrt(gamma), 2);
-      order = 0;
-      while (order < n_max && order_sigma(order) * order_sigma(order) > 2 * edge) ++order;
-      // Review finding 4: on real data (model error above the noise) the
-      // order stopped at the cap and was reported as "read from the singular
-      // values". Say so when σ_{n_max+1} is still above the noise level too.
-      if (order == n_max && n_max < order_sigma.size() && order_sigma(n_max) * order_sigma(n_max) > 2 * edge)
-        capped = "order " + std::to_string(order) + " is the top of the searched range (n <= " +
-                 std::to_string(n_max) + " at r = " + std::to_string(order_r) +
-                 "), not where the singular values reach the noise level (sigma_" + std::to_string(n_max + 1) +
-                 "^2 = " + fmt(order_sigma(n_max) * order_sigma(n_max), 3) + " > 2 x edge " + fmt(2 * edge, 3) +
-                 "): the data need a larger --max-order (and --r), or the noise model is too optimistic";
-      if (order == 0)
-        fail(ErrorKind::Order, "order", "no singular value of step 1c rises above the noise level (largest " +
-                                            fmt(order_sigma(0) * order_sigma(0), 3) + " vs edge " + fmt(edge, 3) +
-                                            "): the data hold no identifiable dynamics at this noise level");
-    } else {
-      // Without a noise model: the largest gap σ_n / σ_{n+1}, n = 1 … n_max.
-      double best = -1;
-      for (int n = 1; n <= n_max && n < order_sigma.size(); ++n) {
-        const double ratio = order_sigma(n - 1) / std::max(order_sigma(n), order_sigma(0) * kUnitRoundoff);
-        if (ratio > best) {
-          best = ratio;
-          order = n;
-        }
-      }
-    }
-  }
+  AutomaticOrder automatic;
+  if (o.order == 0) automatic = automatic_order(d, o, r_feasible);
+  const int order = o.order > 0 ? o.order : automatic.order;
   FrfResult best;
   if (o.r > 0) {
     best = identify_frf_fixed(d, order, o.r, o.continuous, o.omega_scale);
@@ -749,12 +768,12 @@ FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
            "every r in [" + std::to_string(r_lo) + ", " + std::to_string(r_hi) + "] failed; last: " + last_error);
     best.r_scan = std::move(scan);
   }
-  if (order_sigma.size() > 0) {
-    best.singular_values = order_sigma;
-    best.order_r = order_r;
+  if (automatic.sigma.size() > 0) {
+    best.singular_values = automatic.sigma;
+    best.order_r = automatic.order_r;
   }
-  best.noise_edge = edge;
-  if (!capped.empty()) best.warnings.push_back(capped);
+  best.noise_edge = automatic.edge;
+  if (!automatic.capped.empty()) best.warnings.push_back(automatic.capped);
   return best;
 }
 
