@@ -2,6 +2,7 @@
 #include <memory>
 
 #include "common.hpp"
+#include "fdsid/error.hpp"
 #include "high_precision.hpp"
 
 namespace fdsid::cli {
@@ -9,24 +10,49 @@ namespace fdsid::cli {
 namespace {
 
 struct CheckCommand {
-  std::string model_path, data_path, json_path;
-  double tolerance = 0;  // 0: the derived default
+  std::string json_path;
+  FrfCheckRequest frf;  // model_path, frf_path, data_path, meta_path, r, method, omega_scale, tolerance
 };
 
 int run(const CheckCommand& c) {
-  refuse_overwrite(c.json_path, {c.model_path, c.data_path}, "--json");
-  return check(c.json_path, c.model_path, c.data_path, c.tolerance);
+  const FrfCheckRequest& q = c.frf;
+  refuse_overwrite(c.json_path, {q.model_path, q.data_path, q.frf_path, q.meta_path}, "--json");
+  const bool pintelon = !q.frf_path.empty() || !q.meta_path.empty();
+  if (!pintelon) {
+    if (q.data_path.empty())
+      throw Error(ErrorKind::Input, "check",
+                  "give the data the candidate was identified from: --data SPECTRUM.csv (Akcay 2011), --frf FRF.csv "
+                  "or --data RECORDS.csv --meta META.json (Pintelon 2002)");
+    if (q.r > 0 || !q.method.empty() || q.omega_scale > 0)
+      throw Error(ErrorKind::Input, q.r > 0 ? "--r" : !q.method.empty() ? "--method" : "--omega-scale",
+                  "applies to FRF and record candidates (--frf, or --data with --meta); a spectral factor's p and "
+                  "r come from its JSON");
+    return check(c.json_path, q.model_path, q.data_path, q.tolerance);
+  }
+  return check_frf(c.json_path, q);
 }
 
 }  // namespace
 
 void register_check(CLI::App& app, Action& chosen) {
   auto c = std::make_shared<CheckCommand>();
+  FrfCheckRequest& q = c->frf;
   auto* chk = app.add_subcommand("check", "oracle: compare a candidate model with the high-precision reference");
-  chk->add_option("--model", c->model_path, "candidate model JSON")->required();
-  chk->add_option("--data", c->data_path, "power-spectrum CSV the candidate was identified from")->required();
+  chk->add_option("--model", q.model_path, "candidate model JSON")->required();
+  auto* data = chk->add_option("--data", q.data_path,
+                               "power-spectrum CSV the candidate was identified from, or periodic records (with --meta)");
+  auto* frf = chk->add_option("--frf", q.frf_path, "FRF CSV the candidate was identified from (Pintelon 2002)");
+  auto* meta = chk->add_option("--meta", q.meta_path, "meta JSON of the records given by --data");
+  frf->excludes(data)->excludes(meta);
+  meta->needs(data);
   add_json_option(chk, c->json_path, "write the comparison here (- = stdout)");
-  chk->add_option("--tolerance", c->tolerance, "relative tolerance (default: derived, see README)");
+  chk->add_option("--tolerance", q.tolerance, "relative tolerance (default: derived, see README)");
+  chk->add_option("--r", q.r, "FRF/records: r of the candidate when its JSON has none (default: V_SUB selection)")
+      ->check(CLI::Range(2, 100000));
+  chk->add_option("--method", q.method, "FRF/records, continuous time: bilinear or orthogonal when the JSON has none")
+      ->check(CLI::IsMember({"bilinear", "orthogonal"}));
+  chk->add_option("--omega-scale", q.omega_scale, "FRF/records, continuous time: omega_scale when the JSON has none")
+      ->check(CLI::PositiveNumber);
   on_parsed(chk, c, chosen, run);
 }
 

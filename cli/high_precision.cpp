@@ -1,5 +1,6 @@
 #include "high_precision.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -7,6 +8,7 @@
 
 #include "fdsid/compare.hpp"
 #include "fdsid/error.hpp"
+#include "fdsid/format.hpp"
 #include "fdsid/io.hpp"
 #include "fdsid/frf_id.hpp"
 #include "fdsid/json.hpp"
@@ -51,6 +53,25 @@ reference::Result run_reference(const std::string& data_path, int order, int& p,
   }
 }
 
+// The candidate's JSON (a model file, or an identified model of the contracts).
+json read_candidate(const std::string& model_path) {
+  std::ifstream f(model_path);
+  if (!f) throw Error(ErrorKind::Input, model_path, "cannot open candidate model");
+  try {
+    return json::parse(f);
+  } catch (const json::parse_error& e) {
+    throw Error(ErrorKind::Input, model_path, std::string("malformed JSON: ") + e.what());
+  }
+}
+
+// A setting the candidate JSON may carry: 0 when absent.
+int int_field(const json& cj, const char* key, const std::string& model_path) {
+  if (!cj.contains(key)) return 0;
+  if (!cj[key].is_number_integer() || cj[key].get<int>() < 1)
+    throw Error(ErrorKind::Input, model_path + " field \"" + key + "\"", "must be a positive integer");
+  return cj[key].get<int>();
+}
+
 }  // namespace
 
 int identify_spectrum_high(const std::string& json_path, const std::string& data_path, int order, int p, int r,
@@ -79,22 +100,9 @@ int check(const std::string& json_path, const std::string& model_path, const std
           double tolerance) {
   // The candidate: a model file; p, r, method taken from it when present (an
   // identified-model JSON of the contracts), else the documented defaults.
-  std::ifstream f(model_path);
-  if (!f) throw Error(ErrorKind::Input, model_path, "cannot open candidate model");
-  json cj;
-  try {
-    cj = json::parse(f);
-  } catch (const json::parse_error& e) {
-    throw Error(ErrorKind::Input, model_path, std::string("malformed JSON: ") + e.what());
-  }
+  const json cj = read_candidate(model_path);
   const StateSpace candidate = model_from_json(cj, model_path);
-  auto int_field = [&](const char* key) {
-    if (!cj.contains(key)) return 0;
-    if (!cj[key].is_number_integer() || cj[key].get<int>() < 1)
-      throw Error(ErrorKind::Input, model_path + " field \"" + key + "\"", "must be a positive integer");
-    return cj[key].get<int>();
-  };
-  int p = int_field("p"), r = int_field("r");
+  int p = int_field(cj, "p", model_path), r = int_field(cj, "r", model_path);
   const bool vo = cj.contains("method") && cj["method"] == "vo1997";
   const Extension ext =
       cj.contains("extension") && cj["extension"] == "conjugate" ? Extension::Conjugate : Extension::HermitianPart;
@@ -211,9 +219,11 @@ json frf_high_json(const reference::FrfResult& res, const FrfHighRequest& q, con
   return j;
 }
 
-}  // namespace
-
-int identify_frf_high(const std::string& json_path, const FrfHighRequest& q, const std::string& note) {
+// The reference's identification for the request (its errors turned into the
+// library's typed errors, as run_reference does for spectra).
+// `perturbation` > 0: reference::FrfOptions::backward_perturbation (check's tolerance).
+reference::FrfResult reference_frf(const FrfHighRequest& q, const reference::Real& perturbation = 0,
+                                   unsigned seed = 1) {
   const std::string domain = q.continuous ? "continuous" : "discrete";
   const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
   reference::FrfResult res;
@@ -226,6 +236,8 @@ int identify_frf_high(const std::string& json_path, const FrfHighRequest& q, con
     o.r = q.r;
     o.continuous_method = q.orthogonal ? "orthogonal" : "bilinear";
     if (q.omega_scale > 0) o.omega_scale = exact(q.omega_scale);
+    o.backward_perturbation = perturbation;
+    o.perturbation_seed = seed;
     res = reference::identify_frf(data, o);
   } catch (const reference::StepError& e) {
     throw Error(ErrorKind::Numerical, where, std::string("reference: ") + e.what());
@@ -233,6 +245,14 @@ int identify_frf_high(const std::string& json_path, const FrfHighRequest& q, con
     throw Error(ErrorKind::Input, where, e.what());
   }
   if (!q.data_path.empty() && !q.continuous) res.model.sample_time = sample_time;
+  return res;
+}
+
+}  // namespace
+
+int identify_frf_high(const std::string& json_path, const FrfHighRequest& q, const std::string& note) {
+  const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
+  const reference::FrfResult res = reference_frf(q);
   const json j = frf_high_json(res, q, where, note);
   if (json_path != "-") {
     std::cout << "identified order " << res.order << " in high precision, r = " << res.r << ", V_SUB = "
@@ -248,6 +268,154 @@ int identify_frf_high(const std::string& json_path, const FrfHighRequest& q, con
   }
   if (!json_path.empty()) write_text_file(json_path, j.dump(2) + "\n");
   return 0;
+}
+
+
+namespace {
+
+// A setting the candidate JSON names or the command line gives (both: they
+// must agree); `none` when neither.
+template <class T>
+T setting(const char* name, const T& from_json, const T& from_cli, const T& none, const std::string& model_path,
+          const std::string& shown_json, const std::string& shown_cli) {
+  if (from_json != none && from_cli != none && from_json != from_cli)
+    throw Error(ErrorKind::Input, "--" + std::string(name),
+                shown_cli + " contradicts the candidate's " + name + " " + shown_json + " (" + model_path +
+                    "); drop the option, or check a candidate made with that setting");
+  return from_json != none ? from_json : from_cli;
+}
+
+// Reads the candidate's method name: empty, "discrete" (Algorithm 1),
+// "bilinear" or "orthogonal" (Algorithm 2.1 / 2.2).
+std::string candidate_method(const json& cj, const std::string& model_path) {
+  if (!cj.contains("method")) return "";
+  const std::string m = cj["method"].is_string() ? cj["method"].get<std::string>() : "";
+  if (m == "pintelon2002-alg1") return "discrete";
+  if (m == "pintelon2002-alg2-bilinear") return "bilinear";
+  if (m == "pintelon2002-alg2-orthogonal") return "orthogonal";
+  if (m == "akcay2011" || m == "vo1997")
+    throw Error(ErrorKind::Input, model_path + " field \"method\"",
+                "\"" + m + "\" is a spectral factor; check it against its spectrum with --data SPECTRUM.csv");
+  throw Error(ErrorKind::Input, model_path + " field \"method\"",
+              "is not pintelon2002-alg1, pintelon2002-alg2-bilinear or pintelon2002-alg2-orthogonal");
+}
+
+}  // namespace
+
+int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
+  const json cj = read_candidate(q.model_path);
+  const StateSpace candidate = model_from_json(cj, q.model_path);
+  if (candidate.order() < 1) throw Error(ErrorKind::Input, q.model_path, "candidate has order 0");
+  if (cj.contains("source") && cj["source"].is_object() &&
+      (cj["source"].contains("errors_in_variables") || cj["source"].contains("improper")))
+    throw Error(ErrorKind::Input, q.model_path,
+                "was identified with --eiv or --improper, which check does not cover yet; check a candidate of "
+                "the plain sample-subspace estimate");
+  const Domain domain = candidate.domain;
+  const std::string jm = candidate_method(cj, q.model_path);
+  if (domain == Domain::Discrete && (jm == "bilinear" || jm == "orthogonal"))
+    throw Error(ErrorKind::Input, q.model_path, "a discrete-time model with a continuous-time method \"" + jm + "\"");
+  if (domain == Domain::Continuous && jm == "discrete")
+    throw Error(ErrorKind::Input, q.model_path, "a continuous-time model with method pintelon2002-alg1 (discrete time)");
+  if (domain == Domain::Discrete && !q.method.empty())
+    throw Error(ErrorKind::Input, "--method", "applies to continuous-time candidates only");
+  std::string note;
+  const std::string method_s =
+      domain == Domain::Discrete ? "" : setting<std::string>("method", jm, q.method, "", q.model_path, jm, q.method);
+  const ContinuousMethod method = method_s == "orthogonal" ? ContinuousMethod::Orthogonal : ContinuousMethod::Bilinear;
+  if (domain == Domain::Continuous && method_s.empty())
+    note += "method: bilinear (Algorithm 2.1; neither the candidate nor --method names one); ";
+  const int json_r = int_field(cj, "r", q.model_path);
+  int r = setting<int>("r", json_r, q.r, 0, q.model_path, std::to_string(json_r), std::to_string(q.r));
+  const double json_ws = cj.contains("omega_scale") && cj["omega_scale"].is_number() ? cj["omega_scale"].get<double>() : 0;
+  double ws = setting<double>("omega-scale", json_ws, q.omega_scale, 0, q.model_path, fmt(json_ws, 17),
+                              fmt(q.omega_scale, 17));
+
+  // The data, read and checked by fast/'s readers (one line naming the cause).
+  const bool from_frf = !q.frf_path.empty();
+  const std::string where = from_frf ? q.frf_path : q.data_path;
+  FrfData data;
+  if (from_frf) {
+    data = read_frf_csv(q.frf_path, domain);
+  } else {
+    int inputs = 0;
+    const Eigen::MatrixXd samples = read_records_csv(q.data_path, inputs);
+    const RecordMeta meta = read_meta(q.meta_path);
+    require_sample_subspace_periods(meta, q.meta_path);
+    if (domain == Domain::Discrete && std::abs(candidate.sample_time - meta.sample_time) > 1e-5 * meta.sample_time)
+      throw Error(ErrorKind::Input, q.model_path + " field \"sample_time\"",
+                  fmt(candidate.sample_time, 10) + " differs from the records' " + fmt(meta.sample_time, 10) + " (" +
+                      q.meta_path + "): the candidate was identified from other data");
+    try {
+      data = record_statistics(samples, inputs, meta, domain).data;
+    } catch (const Error& e) {
+      throw e.within(q.data_path + " with " + q.meta_path);
+    }
+  }
+  if (candidate.inputs() != data.inputs() || candidate.outputs() != data.outputs())
+    throw Error(ErrorKind::Input, q.model_path,
+                "has " + std::to_string(candidate.inputs()) + " inputs and " + std::to_string(candidate.outputs()) +
+                    " outputs; the data have " + std::to_string(data.inputs()) + " and " +
+                    std::to_string(data.outputs()));
+  if (domain == Domain::Continuous && ws == 0) ws = std::sqrt(data.omega.minCoeff() * data.omega.maxCoeff());
+
+  if (r == 0) {  // r as identify-frf chooses it at the candidate's order
+    FrfOptions o;
+    o.order = candidate.order();
+    o.continuous = method;
+    o.omega_scale = ws;
+    try {
+      r = select_order_and_r(data, o).r;
+    } catch (const Error& e) {
+      throw e.within(where);
+    }
+    note += "r = " + std::to_string(r) +
+            " by fdsid's V_SUB selection (Pintelon 2002 Section 5; the candidate JSON has no r, give --r); ";
+  }
+
+  FrfHighRequest hq;
+  hq.frf_path = q.frf_path;
+  hq.data_path = q.data_path;
+  hq.meta_path = q.meta_path;
+  hq.continuous = domain == Domain::Continuous;
+  hq.orthogonal = method == ContinuousMethod::Orthogonal;
+  hq.omega_scale = ws;
+  hq.order = candidate.order();
+  hq.r = r;
+  const reference::FrfResult res = reference_frf(hq);
+
+  FrfOracleCheck k;
+  k.candidate_path = q.model_path;
+  k.data_path = where;
+  k.meta_path = q.meta_path;
+  k.order = res.order;
+  k.r = r;
+  k.domain = domain;
+  k.method = method;
+  k.omega_scale = ws;
+  k.method_name = frf_method_name(domain, method);
+  if (!note.empty()) k.settings_note = note.substr(0, note.size() - 2);
+  k.reference_model = frf_high_json(res, hq, where, "");
+  StateSpace ref = model_from_json(k.reference_model, "reference model");  // decimal strings, correctly rounded
+  if (domain == Domain::Discrete) ref.sample_time = candidate.sample_time;
+  // The tolerance (compare.hpp, FrfTolerance): the reference again, three
+  // times, with Z and C_Y moved by the backward error sqrt(rows cols) u of a
+  // correct double implementation in independent random directions.
+  const int rows = 2 * data.frequencies() * data.columns(), cols = r * (data.inputs() + data.outputs());
+  k.backward_perturbation = std::sqrt(double(rows) * cols) * 0x1p-53;
+  const reference::Real size = sqrt(reference::Real(rows) * cols) * ldexp(reference::Real(1), -53);
+  for (unsigned seed = 1; q.tolerance <= 0 && seed <= 3; ++seed)
+    k.tolerance.perturbed.push_back(
+        model_from_json(frf_high_json(reference_frf(hq, size, seed), hq, where, ""), "perturbed reference model"));
+  for (StateSpace& p : k.tolerance.perturbed)
+    if (domain == Domain::Discrete) p.sample_time = candidate.sample_time;
+  k.tolerance.given = q.tolerance;
+  k.tolerance.method = method;
+  k.tolerance.omega_scale = ws;
+  k.comparison = compare_frf_models(candidate, ref, data.omega, dense_frequency_grid(domain, data.omega), k.tolerance);
+  if (json_path != "-") std::cout << k.summary();
+  if (!json_path.empty()) write_text_file(json_path, to_json(k).dump(2) + "\n");
+  return k.agree() ? 0 : 1;
 }
 
 }  // namespace fdsid::cli

@@ -21,6 +21,24 @@ int identify_spectrum_high(const std::string& json_path, const std::string& data
 int check(const std::string& json_path, const std::string& model_path, const std::string& data_path,
           double tolerance);
 
+/// `check --frf FILE` / `check --data REC.csv --meta META.json`: what the
+/// candidate is checked against; r, method and omega_scale are taken from the
+/// candidate JSON when it carries them, else from these options (0 / empty:
+/// r by fdsid's V_SUB selection at the candidate's order, bilinear, the
+/// default omega_scale).
+struct FrfCheckRequest {
+  std::string model_path, frf_path, data_path, meta_path;
+  int r = 0;
+  std::string method;  ///< "", "bilinear" or "orthogonal"
+  double omega_scale = 0;
+  double tolerance = 0;  ///< 0: the derived rule
+};
+
+/// Identify with the reference at the candidate's settings and compare G on
+/// the data grid and on a dense grid, and the poles (compare_frf_models).
+/// Exit 0 agree, 1 disagree.
+int check_frf(const std::string& json_path, const FrfCheckRequest& request);
+
 /// `sample-spectrum --precision high`: the model's spectrum from its decimal
 /// entries in 50 digits, written with 40 significant digits.
 int sample_spectrum_high(const std::string& model_path, int M, const std::string& out_path);

@@ -151,8 +151,8 @@ RC_GTEST_PROP(FrfSimilarity, SameGAndPolesForASimilarTruthAndEq14RecoversIt, ())
   for (int k = 0; k <= 64; ++k) {
     const double om = M_PI * (k + 0.5) / 65.0;
     const double err = (frequency_response(a.model, om) - frequency_response(b.model, om)).norm();
-    const double tol = ca.eps_A * transfer_sensitivity(a.model, std::polar(1.0, om)) +
-                       cb.eps_A * transfer_sensitivity(b.model, std::polar(1.0, om));
+    const double tol = ca.eps_A * fdsid::testing::transfer_sensitivity(a.model, std::polar(1.0, om)) +
+                       cb.eps_A * fdsid::testing::transfer_sensitivity(b.model, std::polar(1.0, om));
     worst = std::max(worst, err / tol);
   }
   RC_LOG() << "G(a) vs G(b): worst error / tolerance " << worst << "\n";

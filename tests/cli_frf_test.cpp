@@ -748,4 +748,171 @@ TEST_F(CliFrf, GapValidateScoresBlindCases) {
   EXPECT_TRUE(IsBadInput(run_fdsid({"gap-validate", "--cases", "0"}), {}));
 }
 
+// ---------------------------------------------------------------------------
+// The oracle for Pintelon (2002): check --frf / --data --meta
+//
+// The candidates are made by `identify-frf` (fdsid's own double-precision
+// implementation: correct, so it must agree) and by `identify-frf` run the
+// way the classic mistakes run it (wrong data, wrong settings): each of those
+// moves G by at least the noise level of the data (relative 1e-2 here, far
+// above any rounding tolerance), so each must disagree.
+
+/// An FRF file of `s` at `omega` with noise: G + N, E|N|² = var_k =
+/// rel² |G_k|² (a 1 % error that varies over frequency, so unweighted and
+/// weighted steps differ), circular complex normal from a fixed seed; the
+/// G_var column carries var_k. `conjugate`: writes conj(G + N) (the classic
+/// e^{+jωt} sign mistake); `drop`: leaves row `drop` out (1-based data row).
+std::string noisy_frf_csv(const fdsid::StateSpace& s, const std::vector<double>& omega, double rel,
+                          bool conjugate = false, int drop = 0, bool with_var = true) {
+  std::mt19937_64 rng(11);
+  std::string text = with_var ? "omega,G_re,G_im,G_var\n" : "omega,G_re,G_im\n";
+  char line[160];
+  for (size_t k = 0; k < omega.size(); ++k) {
+    const std::complex<double> xi =
+        s.domain == fdsid::Domain::Discrete ? std::polar(1.0, omega[k]) : std::complex<double>(0.0, omega[k]);
+    const auto g0 = G_at(s, xi);
+    const double var = rel * rel * std::norm(g0);
+    std::normal_distribution<double> n(0.0, std::sqrt(var / 2));
+    const double nr = n(rng), ni = n(rng);
+    const std::complex<double> g = g0 + std::complex<double>(nr, ni);
+    if (static_cast<int>(k) + 1 == drop) continue;
+    if (with_var)
+      std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,%.17g\n", omega[k], g.real(), conjugate ? -g.imag() : g.imag(), var);
+    else
+      std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g\n", omega[k], g.real(), conjugate ? -g.imag() : g.imag());
+    text += line;
+  }
+  return text;
+}
+
+std::vector<double> discrete_grid(int F) {
+  std::vector<double> omega;
+  for (int k = 0; k < F; ++k) omega.push_back(M_PI * (k + 0.5) / F);
+  return omega;
+}
+
+std::vector<double> continuous_grid(int F) {
+  std::vector<double> omega;
+  for (int k = 0; k < F; ++k) omega.push_back(0.1 * std::pow(1000.0, k / (F - 1.0)));  // 0.1 … 100 rad/s
+  return omega;
+}
+
+/// check's verdict on a candidate: exit status 0 with "AGREES" or 1 with
+/// "DISAGREES", and the JSON's quantities each with distance, tolerance, ratio.
+void expect_verdict(const RunResult& r, bool agree, const json& j) {
+  ASSERT_FALSE(r.timed_out) << describe(r);
+  ASSERT_EQ(r.status, agree ? 0 : 1) << describe(r);
+  EXPECT_NE(r.out.find(agree ? "AGREES: G on the data grid" : "DISAGREES: G on the data grid"), std::string::npos)
+      << r.out;
+  EXPECT_EQ(j["agree"], agree);
+  ASSERT_EQ(j["quantities"].size(), 3u);
+  double worst = 0;
+  for (const auto& q : j["quantities"]) {
+    ASSERT_TRUE(q.contains("distance") && q.contains("tolerance") && q.contains("ratio")) << q.dump();
+    EXPECT_GT(q["tolerance"].get<double>(), 0) << q.dump();
+    worst = std::max(worst, q["ratio"].get<double>());
+  }
+  EXPECT_EQ(worst <= 1.0, agree) << j["quantities"].dump();
+  std::printf("check: worst ratio distance/tolerance %.3g (%s)\n", worst, agree ? "agrees" : "disagrees");
+}
+
+TEST_F(CliFrf, CheckAgreesWithACorrectCandidateInEveryDomainAndMethod) {
+  const std::string d = write("d.csv", noisy_frf_csv(pintelon_plant(), discrete_grid(60), 1e-2));
+  const std::string c = write("c.csv", noisy_frf_csv(continuous_plant(), continuous_grid(60), 1e-2));
+  struct Case {
+    std::string name, frf, domain, method;
+  };
+  for (const Case& k : {Case{"discrete", d, "discrete", "bilinear"}, Case{"bilinear", c, "continuous", "bilinear"},
+                        Case{"orthogonal", c, "continuous", "orthogonal"}}) {
+    SCOPED_TRACE(k.name);
+    const std::string cand = path(k.name + ".json");
+    ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--frf", k.frf, "--domain", k.domain, "--method", k.method,
+                                     "--order", "4", "--r", "8", "--json", cand})));
+    const RunResult r = run_fdsid({"check", "--model", cand, "--frf", k.frf, "--json", path(k.name + ".check.json")});
+    const json j = read_json(k.name + ".check.json");
+    expect_verdict(r, true, j);
+    EXPECT_EQ(j["r"], 8);
+    EXPECT_EQ(j["method"], k.domain == "discrete" ? "pintelon2002-alg1" : "pintelon2002-alg2-" + k.method);
+  }
+  // Records: the sample means and variances over the periods (Section 4.1).
+  simulate(64, 6, 1e-3, "rec");
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
+                                   "--order", "4", "--r", "8", "--json", path("rec.json")})));
+  const RunResult r = run_fdsid({"check", "--model", path("rec.json"), "--data", path("rec.csv"), "--meta",
+                                 path("rec.meta.json"), "--json", path("rec.check.json")});
+  expect_verdict(r, true, read_json("rec.check.json"));
+  // Without r in the JSON, r comes from the V_SUB selection, and the line says so.
+  json bare = read_json("discrete.json");
+  bare.erase("r");
+  const std::string no_r = write("no_r.json", bare.dump());
+  const RunResult s = run_fdsid({"check", "--model", no_r, "--frf", d, "--r", "8"});
+  EXPECT_EQ(s.status, 0) << describe(s);
+}
+
+TEST_F(CliFrf, CheckCatchesTheClassicMistakes) {
+  const std::vector<double> wd = discrete_grid(60), wc = continuous_grid(60);
+  const std::string d = write("d.csv", noisy_frf_csv(pintelon_plant(), wd, 1e-2));
+  const std::string c = write("c.csv", noisy_frf_csv(continuous_plant(), wc, 1e-2));
+  auto candidate = [&](const std::string& name, const std::string& frf, std::vector<std::string> extra) {
+    std::vector<std::string> args = {"identify-frf", "--frf", frf, "--order", "4", "--r", "8", "--json", path(name)};
+    args.insert(args.end(), extra.begin(), extra.end());
+    EXPECT_TRUE(Succeeded(run_fdsid(args)));
+    return path(name);
+  };
+  auto expect_disagrees = [&](const std::string& what, const std::string& cand, const std::string& frf,
+                              std::vector<std::string> extra = {}) {
+    SCOPED_TRACE(what);
+    std::vector<std::string> args = {"check", "--model", cand, "--frf", frf, "--json", path("verdict.json")};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const RunResult r = run_fdsid(args);
+    expect_verdict(r, false, read_json("verdict.json"));
+  };
+  // A conjugated FRF (the e^{+jwt} convention): the same |G|, the phase mirrored.
+  expect_disagrees("conjugated FRF",
+                   candidate("conj.json", write("conj.csv", noisy_frf_csv(pintelon_plant(), wd, 1e-2, true)), {}), d);
+  // Unweighted steps: the G_var column ignored (unit weights).
+  expect_disagrees("unweighted",
+                   candidate("unw.json", write("unw.csv", noisy_frf_csv(pintelon_plant(), wd, 1e-2, false, 0, false)), {}),
+                   d);
+  // A dropped sample (an off-by-one reading of the file).
+  expect_disagrees("dropped sample",
+                   candidate("drop.json", write("drop.csv", noisy_frf_csv(pintelon_plant(), wd, 1e-2, false, 1)), {}), d);
+  // An r mislabelled: identified with r = 8, labelled r = 10.
+  json mis = read_json(candidate("good.json", d, {}).substr(dir_.string().size() + 1));
+  mis["r"] = 10;
+  expect_disagrees("r mislabelled", write("mis.json", mis.dump()), d);
+  // Algorithm 2.2 labelled as 2.1.
+  json orth = read_json(candidate("orth.json", c, {"--domain", "continuous", "--method", "orthogonal"})
+                            .substr(dir_.string().size() + 1));
+  orth["method"] = "pintelon2002-alg2-bilinear";
+  expect_disagrees("orthogonal labelled bilinear", write("orth_as_bil.json", orth.dump()), c);
+}
+
+TEST_F(CliFrf, CheckRefusesWhatItCannotCompare) {
+  const std::string d = write("d.csv", noisy_frf_csv(pintelon_plant(), discrete_grid(40), 1e-2));
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--frf", d, "--order", "4", "--r", "8", "--json", path("c.json")})));
+  const std::string cand = path("c.json");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cand, "--frf", d, "--r", "9"}), {"--r", "contradicts", "8"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cand, "--frf", d, "--method", "orthogonal"}),
+                         {"--method", "continuous-time"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cand}), {"--frf"}));
+  json spectral = read_json("c.json");
+  spectral["method"] = "akcay2011";
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", write("s.json", spectral.dump()), "--frf", d}),
+                         {"spectral factor", "--data"}));
+  json cont = read_json("c.json");
+  cont["domain"] = "continuous";
+  cont["sample_time"] = 0;
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", write("cont.json", cont.dump()), "--frf", d}),
+                         {"continuous-time model", "pintelon2002-alg1"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cand, "--data", d, "--r", "8"}), {"--r", "--meta"}));
+  // Records whose sample time is not the candidate's.
+  simulate(32, 4, 1e-3, "rec");
+  json rec_meta = read_json("rec.meta.json");
+  rec_meta["sample_time"] = 0.5;
+  const std::string meta = write("half.meta.json", rec_meta.dump());
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cand, "--data", path("rec.csv"), "--meta", meta}),
+                         {"sample_time", "0.5"}));
+}
+
 }  // namespace

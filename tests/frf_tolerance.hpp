@@ -164,7 +164,7 @@ inline NoiseFreeCheck check_noise_free(const StateSpace& truth, const FrfResult&
     eval.push_back(cont ? std::sqrt(pts[i] * pts[i - 1]) : 0.5 * (pts[i] + pts[i - 1]));
   for (double w : eval) {
     const double err = (frequency_response(est, w) - frequency_response(truth, w)).norm();
-    const double tol = out.eps_A * transfer_sensitivity(inner, xi_of(w));
+    const double tol = out.eps_A * fdsid::testing::transfer_sensitivity(inner, xi_of(w));
     if (err / tol > out.g_ratio || out.g_tol == 0) {
       out.g_ratio = err / tol;
       out.g_err = err;

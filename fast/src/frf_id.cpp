@@ -639,6 +639,7 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
     }
   }
   res.model = est;
+  if (d.domain == Domain::Continuous) res.omega_scale = b.omega_scale;
   res.order = n;
   res.r = r;
   res.order_r = r;

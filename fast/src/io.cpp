@@ -538,6 +538,7 @@ nlohmann::json frf_result_to_json(const FrfResult& r, const std::string& method)
   j["order"] = r.order;
   j["method"] = method;
   j["r"] = r.r;
+  if (r.omega_scale > 0) j["omega_scale"] = r.omega_scale;  // what check needs to repeat Algorithm 2
   j["singular_values"] =
       std::vector<double>(r.singular_values.data(), r.singular_values.data() + r.singular_values.size());
   j["singular_values_of"] = "C_Y^{-1/2} R22^T (Pintelon 2002 step 1c), r = " + std::to_string(r.order_r);

@@ -182,4 +182,42 @@ json to_json(const OracleCheck& k) {
           {"reference_model", k.reference_model}};
 }
 
+
+json to_json(const FrfOracleCheck& k) {
+  const FrfModelComparison& c = k.comparison;
+  json quantities = json::array();
+  const std::pair<const char*, const OracleQuantity*> q[] = {
+      {"g_data_grid", &c.g_data}, {"g_dense_grid", &c.g_dense}, {"poles", &c.poles}};
+  for (const auto& [name, x] : q) {
+    json e = {{"quantity", name}, {"distance", x->distance}, {"tolerance", x->tolerance}, {"ratio", x->ratio}};
+    if (x != &c.poles) e["omega"] = x->omega;
+    quantities.push_back(e);
+  }
+  json j = {{"agree", k.agree()},
+            {"quantities", quantities},
+            {"candidate", k.candidate_path},
+            {"data", k.data_path},
+            {"order", {{"candidate", c.candidate_order}, {"reference", c.reference_order}}},
+            {"r", k.r},
+            {"domain", to_string(k.domain)},
+            {"method", k.method_name},
+            {"g_relative", c.g_relative},
+            {"summary", k.summary()},
+            {"note", k.settings_note},
+            {"tolerance",
+             {{"backward_perturbation", k.backward_perturbation},
+              {"safety_factor", FrfTolerance::kSafety},
+              {"rule", k.tolerance.given > 0
+                           ? "given by --tolerance (G relative to max |G_ref|; poles absolute, relative in "
+                             "continuous time)"
+                           : "10 x the largest change of G (per frequency) and of each pole when the reference "
+                             "is rerun with Z and C_Y moved by sqrt(rows cols) u in 3 random directions (the "
+                             "backward error of a correct double implementation), plus 4 n u times the "
+                             "first-order sensitivity for the candidate's own rounding (fdsid/compare.hpp)"}}},
+            {"reference_model", k.reference_model}};
+  if (!k.meta_path.empty()) j["meta"] = k.meta_path;
+  if (k.domain == Domain::Continuous) j["omega_scale"] = k.omega_scale;
+  return j;
+}
+
 }  // namespace fdsid

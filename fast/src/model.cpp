@@ -27,7 +27,11 @@ void validate(const StateSpace& m, const std::string& where) {
   const std::pair<const char*, const Eigen::MatrixXd*> mats[] = {{"A", &m.A}, {"B", &m.B}, {"C", &m.C}, {"D", &m.D}};
   for (const auto& [name, mat] : mats)
     if (!mat->allFinite()) fail(std::string(name) + " has a NaN or infinite entry");
-  if (!(m.sample_time > 0) || !std::isfinite(m.sample_time)) fail("sample_time must be positive and finite");
+  // A continuous-time model may say sample_time 0 (the reference writes it so);
+  // a discrete-time one needs its sample period.
+  if (!std::isfinite(m.sample_time) || m.sample_time < 0 || (m.domain == Domain::Discrete && !(m.sample_time > 0)))
+    fail(m.domain == Domain::Discrete ? "sample_time must be positive and finite"
+                                      : "sample_time must be finite and not negative (0 for a continuous-time model)");
 }
 
 Eigen::MatrixXcd transfer(const StateSpace& m, cplx z) {

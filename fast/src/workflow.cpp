@@ -79,13 +79,25 @@ double std_ratio_standard_error(int runs) {
   return std::sqrt(2.0) / std::sqrt(2.0 * runs);
 }
 
-double eigenvalue_condition_number(const Eigen::MatrixXd& A) {
-  double kappa = 1;
-  if (A.rows() == 0) return kappa;
-  Eigen::EigenSolver<Eigen::MatrixXd> es(A);
-  const Eigen::MatrixXcd V = es.eigenvectors(), W = V.inverse();
-  for (Eigen::Index i = 0; i < A.rows(); ++i) kappa = std::max(kappa, V.col(i).norm() * W.row(i).norm());
-  return kappa;
+namespace {
+std::string quantity_text(const char* name, const OracleQuantity& q, bool at_omega) {
+  char line[200];
+  std::snprintf(line, sizeof line, "%s %.3e%s (tol %.1e, ratio %.2g)", name, q.distance,
+                at_omega ? (" at omega = " + fmt(q.omega, 6)).c_str() : "", q.tolerance, q.ratio);
+  return line;
+}
+}  // namespace
+
+std::string FrfOracleCheck::summary() const {
+  const FrfModelComparison& c = comparison;
+  std::string out = settings_note.empty() ? "" : settings_note + "\n";
+  if (c.candidate_order != c.reference_order)
+    out += "orders differ: candidate " + std::to_string(c.candidate_order) + ", reference " +
+           std::to_string(c.reference_order) + "\n";
+  out += std::string(agree() ? "AGREES" : "DISAGREES") + ": " + quantity_text("G on the data grid", c.g_data, true) +
+         ", " + quantity_text("G on a dense grid", c.g_dense, true) + ", " + quantity_text("poles", c.poles, false) +
+         "; max relative G difference " + sci(c.g_relative, 3) + "\n";
+  return out;
 }
 
 void set_oracle_tolerances(OracleCheck& check, const StateSpace& reference, int m, int N, double sigma1_over_sigma2n,

@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 
 namespace fdsid::reference {
 namespace {
@@ -301,6 +302,45 @@ DataMatrices step1a_data_matrices(const FrfData& d, const Shape& s, const Matrix
   return z;
 }
 
+// The backward-error model of FrfOptions::backward_perturbation: each row of
+// Z moved by size × its norm, C_Y by size × ‖C_Y‖_F, in random directions (a
+// fixed-seed Mersenne twister; the directions need no decimal constants).
+struct Perturbation {
+  Real size = 0;
+  unsigned seed = 1;
+};
+
+void perturb(DataMatrices& z, const Perturbation& pert) {
+  std::mt19937_64 rng(pert.seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  auto direction = [&](Eigen::Index rows, Eigen::Index cols) {
+    MatrixR g(rows, cols);
+    for (Eigen::Index i = 0; i < rows; ++i)
+      for (Eigen::Index j = 0; j < cols; ++j) g(i, j) = Real(normal(rng));
+    return g;
+  };
+  for (MatrixR* X : {&z.U_re, &z.Y_re})
+    for (Eigen::Index i = 0; i < X->rows(); ++i) {
+      const MatrixR g = direction(1, X->cols());
+      X->row(i) += pert.size * X->row(i).norm() / g.norm() * g;
+    }
+  const MatrixR g = direction(z.C_Y.rows(), z.C_Y.cols());
+  const MatrixR e = g + g.transpose();
+  z.C_Y += pert.size * z.C_Y.norm() / e.norm() * e;
+}
+
+// Algorithm 2.2's recurrence s̃ q_j = Σ_i H_ij q_i moved by size × ‖H‖_F in a
+// random direction on its Hessenberg pattern: the rounding of the inner
+// products that give H when the basis is computed in floating point.
+void perturb_recurrence(MatrixR& H, const Perturbation& pert) {
+  std::mt19937_64 rng(pert.seed + 1000);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  MatrixR g = MatrixR::Zero(H.rows(), H.cols());
+  for (Eigen::Index j = 0; j < H.cols(); ++j)
+    for (Eigen::Index i = 0; i <= j + 1 && i < H.rows(); ++i) g(i, j) = Real(normal(rng));
+  H += pert.size * H.norm() / g.norm() * g;
+}
+
 // Step 1b, elimination of the input term: 𝐘^re Π of Eq. (20), which has the
 // Gram matrix of R22ᵀ of the QR factorisation Zᵀ = QR.
 // Method: 𝐘^re Π = 𝐘^re − (𝐘^re𝐔^reᵀ)(𝐔^re𝐔^reᵀ)⁻¹𝐔^re with Π never formed,
@@ -436,8 +476,9 @@ struct Estimate {
 // s̃ q_j = Σ_i H_ij q_i and Ĉ = Ô[block 0] / q0.
 Estimate algorithm1(const FrfData& d, const Shape& s, const std::vector<Complex>& xi,
                     const MatrixC& rows_u, const MatrixC& rows_y, const MatrixR* H, const Real& q0,
-                    int n, int r) {
-  const DataMatrices z = step1a_data_matrices(d, s, rows_u, rows_y, r);
+                    int n, int r, const Perturbation& pert) {
+  DataMatrices z = step1a_data_matrices(d, s, rows_u, rows_y, r);
+  if (pert.size > 0) perturb(z, pert);
   const MatrixR YPi = step1b_eliminate_input(z.U_re, z.Y_re, r, s.m);
   const ObservabilityEstimate O = step1c_noise_weighted_svd(z.C_Y, YPi, n);
   Estimate est;
@@ -451,25 +492,26 @@ Estimate algorithm1(const FrfData& d, const Shape& s, const std::vector<Complex>
 // Algorithms 1, 2.1, 2.2: the choice of ξ and of the rows
 
 // Algorithm 1, discrete time: ξ_k = z_k = e^{jω_k}, monomial rows (Eq. 7).
-Estimate algorithm1_discrete(const FrfData& data, const Shape& s, int n, int r) {
+Estimate algorithm1_discrete(const FrfData& data, const Shape& s, int n, int r, const Perturbation& pert) {
   std::vector<Complex> xi(s.F);
   for (int k = 0; k < s.F; ++k) xi[k] = Complex(cos(data.omega[k]), sin(data.omega[k]));
   const MatrixC W = monomial_rows(xi, r);
-  return algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r);
+  return algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r, pert);
 }
 
 // Algorithm 2.1: Algorithm 1 with ξ = w = (s̃ − 1)/(s̃ + 1), s̃ = jω/ω_scale
 // (|w| = 1), then the bilinear back-transform to s (bilinear_to_continuous).
 // Fails: as Algorithm 1, and StepError(4) when I − A_w is singular.
 // References: Pintelon (2002) Algorithm 2.1; Yang & Sanada (2000).
-Estimate algorithm2_1_bilinear(const FrfData& data, const Shape& s, const Real& scale, int n, int r) {
+Estimate algorithm2_1_bilinear(const FrfData& data, const Shape& s, const Real& scale, int n, int r,
+                               const Perturbation& pert) {
   std::vector<Complex> xi(s.F);
   for (int k = 0; k < s.F; ++k) {
     const Complex st(Real(0), data.omega[k] / scale);
     xi[k] = (st - Real(1)) / (st + Real(1));
   }
   const MatrixC W = monomial_rows(xi, r);
-  const Estimate w = algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r);
+  const Estimate w = algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r, pert);
   Model w_model;
   w_model.A = w.A;
   w_model.B = w.B;
@@ -483,7 +525,8 @@ Estimate algorithm2_1_bilinear(const FrfData& data, const Shape& s, const Real& 
 // replaced by the orthonormal bases of the inputs (weights ‖U[k]‖²_F) and of
 // the outputs (‖Y[k]‖²_F); A, B are rescaled from s̃ to s.
 // References: Pintelon (2002) Algorithm 2.2; Van Overschee & De Moor (1996).
-Estimate algorithm2_2_orthogonal(const FrfData& data, const Shape& s, const Real& scale, int n, int r) {
+Estimate algorithm2_2_orthogonal(const FrfData& data, const Shape& s, const Real& scale, int n, int r,
+                                 const Perturbation& pert) {
   std::vector<Complex> xi(s.F);
   std::vector<Real> weight_u(s.F), weight_y(s.F);
   for (int k = 0; k < s.F; ++k) {
@@ -492,8 +535,9 @@ Estimate algorithm2_2_orthogonal(const FrfData& data, const Shape& s, const Real
     weight_y[k] = data.Y[k].squaredNorm();
   }
   const PolynomialBasis bu = algorithm2_2_orthonormal_basis(xi, weight_u, r, "input");
-  const PolynomialBasis by = algorithm2_2_orthonormal_basis(xi, weight_y, r, "output");
-  Estimate est = algorithm1(data, s, xi, bu.values, by.values, &by.H, by.T(0, 0), n, r);
+  PolynomialBasis by = algorithm2_2_orthonormal_basis(xi, weight_y, r, "output");
+  if (pert.size > 0) perturb_recurrence(by.H, pert);
+  Estimate est = algorithm1(data, s, xi, bu.values, by.values, &by.H, by.T(0, 0), n, r, pert);
   est.A *= scale;
   est.B *= scale;
   return est;
@@ -512,13 +556,14 @@ FrfResult identify_frf(const FrfData& data, const FrfOptions& options) {
     scale = sqrt(*lo * *hi);
   }
 
+  const Perturbation pert{options.backward_perturbation, options.perturbation_seed};
   Estimate est;
   if (!continuous)
-    est = algorithm1_discrete(data, s, n, r);
+    est = algorithm1_discrete(data, s, n, r, pert);
   else if (options.continuous_method == "bilinear")
-    est = algorithm2_1_bilinear(data, s, scale, n, r);
+    est = algorithm2_1_bilinear(data, s, scale, n, r, pert);
   else
-    est = algorithm2_2_orthogonal(data, s, scale, n, r);
+    est = algorithm2_2_orthogonal(data, s, scale, n, r, pert);
 
   FrfResult result;
   result.model.domain = data.domain;

@@ -1,6 +1,7 @@
 #pragma once
 /// Similarity-invariant comparison of two state-space models: what the oracle
 /// (`fdsid check`) measures between a candidate and the reference's model.
+#include "fdsid/frf_id.hpp"
 #include "fdsid/model.hpp"
 
 namespace fdsid {
@@ -13,6 +14,12 @@ namespace fdsid {
 /// smooth function of U_2n with derivative O(σ1/||S||); 4 covers the
 /// least-squares and Riccati steps. Measured errors lie 10-1000 times below.
 double double_precision_spectrum_tolerance(int p, int r, int m, int N, double sigma1_over_sigma2n);
+
+/// Purpose: the eigenvalue condition number of A, max_i ||v_i|| ||w_i|| over
+/// right eigenvectors v_i and the rows w_i of V⁻¹ (1 for a normal matrix).
+/// Method: Eigen::EigenSolver; at least 1.
+/// Fails: never (an empty A gives 1).
+double eigenvalue_condition_number(const Eigen::MatrixXd& A);
 
 struct ModelComparison {
   int candidate_order = 0, reference_order = 0;
@@ -59,5 +66,85 @@ struct ModelComparison {
 /// distance +inf), not refused.
 ModelComparison compare_models(const StateSpace& candidate, const StateSpace& reference, int grid = 4097,
                                int markov = 0 /* 0: 2n + 1 */);
+
+// ---------------------------------------------------------------------------
+// Models identified from FRF samples or periodic records (Pintelon 2002):
+// what `fdsid check --frf` / `--data --meta` measures.
+
+/// One compared quantity: the candidate's distance from the reference, the
+/// tolerance at the same place and their ratio (<= 1 agrees), with the
+/// frequency (G) where the ratio is largest.
+struct OracleQuantity {
+  double distance = 0, tolerance = 0, ratio = 0;
+  double omega = 0;  ///< G: where the ratio is largest (the data's units); poles: unused
+  bool agrees() const { return ratio <= 1.0; }
+};
+
+/// Purpose: first-order sensitivity s(ξ) of G(ξ) = D + C (ξI − A)⁻¹ B to
+/// relative perturbations of size 1 in each of A, B, C, D (‖δX‖ ≤ ‖X‖).
+/// Method: with R = (ξI − A)⁻¹, δG = δD + δC R B + C R δB + C R δA R B, so
+/// ‖δG‖ ≤ ‖C R‖ ‖A‖ ‖R B‖ + ‖C‖ ‖R B‖ + ‖C R‖ ‖B‖ + ‖D‖ (2-norms, by SVD).
+/// Fails: never (ξ an eigenvalue of A gives +inf).
+double transfer_sensitivity(const StateSpace& model, cplx xi);
+
+/// Purpose: the tolerance rule of compare_frf_models.
+/// Method (statistical condition estimation, Kenney & Laub 1994, with the
+/// backward-error model of a correct double implementation): `perturbed` are
+/// the reference's identifications of the same data with Z and C_Y moved by
+/// their backward errors γ = √(rows · cols) u (reference::FrfOptions::
+/// backward_perturbation; rows × cols = 2Fc × r(m+p), the shape of Zᵀ: the
+/// probabilistic size of Householder QR's column-wise backward error, Higham &
+/// Mary 2019, λ = 1) in independent random directions. How far each moves G
+/// and the poles is what rounding of that size does on these data, to first
+/// order. The tolerance is kSafety = 10 times the largest of them: a
+/// candidate's own rounding is a perturbation of the same law, and the norm of
+/// a Gaussian perturbation's effect exceeds 10 times the largest of 3
+/// independent samples with probability < 1e-5 (Rayleigh magnitudes:
+/// P = E[exp(−50 M²)] ≈ 0.75/50³ for M the largest of 3), plus the rounding
+/// of the candidate's numbers and of evaluating them: 4n u s(ξ) for G,
+/// 4n u ‖Â‖ κ_j |dλ/dμ| for the poles (and, Algorithm 2.1, the back-transform's
+/// 4n u cond(I − Â_w) ‖Â_c‖ κ(Â_c)).
+struct FrfTolerance {
+  static constexpr double kSafety = 10;
+  std::vector<StateSpace> perturbed;  ///< the reference at perturbed Z, C_Y (at least one)
+  double given = 0;                   ///< > 0: the user's relative tolerance instead of the rule
+  ContinuousMethod method = ContinuousMethod::Bilinear;
+  double omega_scale = 1;             ///< ω_s of Algorithm 2 (continuous models)
+};
+
+/// The comparison of a candidate with the reference's FRF model.
+struct FrfModelComparison {
+  int candidate_order = 0, reference_order = 0;
+  OracleQuantity g_data;   ///< G on the data's frequencies
+  OracleQuantity g_dense;  ///< G on a dense grid (see compare_frf_models)
+  OracleQuantity poles;    ///< poles, each against its own tolerance
+  /// max over the data grid of ||G_c − G_r||_F / max ||G_r||_F (for reading).
+  double g_relative = 0;
+  bool agree() const {
+    return candidate_order == reference_order && g_data.agrees() && g_dense.agrees() && poles.agrees();
+  }
+};
+
+/// Purpose: compare a candidate model with the reference's model of the same
+/// FRF data in terms invariant under similarity: G and the poles.
+/// Method: G at each frequency ω of both grids, ||G_c(ω) − G_r(ω)||_F against
+/// its own tolerance (FrfTolerance); each reference pole λ_j against its own
+/// tolerance, every candidate pole measured against its nearest reference pole
+/// and every reference pole against its nearest candidate pole (a Hausdorff
+/// distance in ratios). s(ξ), κ_j and dλ/dμ are those of the reference model
+/// taken to the domain where Algorithm 1 ran (the w-plane of Algorithm 2.1,
+/// s̃ = s/ω_s for 2.2, z itself in discrete time).
+/// With a given tolerance: G relative to max ||G_r|| on the grid, poles
+/// absolutely (discrete) or relative to |λ_j| (continuous).
+/// Fails: Error(Input) when the shapes or domains differ, or no perturbed
+/// models are given without a tolerance.
+FrfModelComparison compare_frf_models(const StateSpace& candidate, const StateSpace& reference,
+                                      const Eigen::VectorXd& data_omega, const Eigen::VectorXd& dense_omega,
+                                      const FrfTolerance& tolerance);
+
+/// The dense grid of compare_frf_models: 2049 points on [0, π] (discrete),
+/// or log-spaced from ω_min/10 to 10 ω_max of the data (continuous: a decade
+/// beyond the band each side, where an extrapolating model still must agree).
+Eigen::VectorXd dense_frequency_grid(Domain domain, const Eigen::VectorXd& data_omega, int points = 2049);
 
 }  // namespace fdsid

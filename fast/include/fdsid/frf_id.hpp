@@ -76,6 +76,8 @@ struct FrfResult {
   /// V_SUB for every r tried (empty when r was given).
   std::vector<std::pair<int, double>> r_scan;
   Eigen::VectorXcd poles;
+  /// ω_s of Algorithm 2 that was used (continuous time; 0 in discrete time).
+  double omega_scale = 0;
   /// κ = max((max(σ_1, ‖L⁻¹‖‖R‖)/σ_n of step 1c) · cond(Ô_r[1:r−1]) of step 2 ·
   /// cond(R11) of step 1b, cond of step 3's least squares): the first-order
   /// amplification of rounding errors into Â (first factor; ‖L⁻¹‖‖R‖ is the

@@ -56,6 +56,8 @@ nlohmann::json to_json(const GapValidation& validation);
 /// `check --json`: agree, orders, p, r, method, extension, the three errors,
 /// the tolerances and their rule, and the reference's model.
 nlohmann::json to_json(const OracleCheck& check);
+/// `fdsid check --frf` / `--data --meta`: agree, quantities (distance, tolerance, ratio), settings, reference model.
+nlohmann::json to_json(const FrfOracleCheck& check);
 /// The "fit" object of identify-frf's JSON.
 nlohmann::json to_json(const FitVerdict& fit);
 

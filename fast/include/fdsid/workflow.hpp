@@ -144,12 +144,6 @@ double std_ratio_standard_error(int runs);
 // ---------------------------------------------------------------------------
 // Oracle check (`fdsid check`)
 
-/// Purpose: the eigenvalue condition number of A, max_i ||v_i|| ||w_i|| over
-/// right eigenvectors v_i and the rows w_i of V⁻¹ (1 for a normal matrix).
-/// Method: Eigen::EigenSolver; at least 1.
-/// Fails: never (an empty A gives 1).
-double eigenvalue_condition_number(const Eigen::MatrixXd& A);
-
 /// The result of comparing a candidate model with the reference's.
 struct OracleCheck {
   std::string candidate_path, data_path;
@@ -178,6 +172,27 @@ struct OracleCheck {
   /// One line naming what failed (or "AGREES: ..."), as `fdsid check` prints it;
   /// for a factor that is not minimum phase: "factor: zero 1.049 outside the
   /// unit circle; the minimum-phase factor has it at 0.953".
+  std::string summary() const;
+};
+
+/// The result of comparing a candidate model of FRF samples or periodic
+/// records with the reference's identification of the same data at the same
+/// settings (`fdsid check --frf` / `--data --meta`).
+struct FrfOracleCheck {
+  std::string candidate_path, data_path, meta_path;  ///< data_path: the FRF or the records
+  int order = 0, r = 0;
+  Domain domain = Domain::Discrete;
+  ContinuousMethod method = ContinuousMethod::Bilinear;
+  double omega_scale = 0;                ///< ω_s used (continuous)
+  std::string method_name;               ///< frf_method_name
+  std::string settings_note;             ///< where r, method, ω_s came from
+  FrfModelComparison comparison;
+  double backward_perturbation = 0;      ///< relative size of the perturbations behind the tolerance
+  FrfTolerance tolerance;
+  nlohmann::json reference_model;
+  bool agree() const { return comparison.agree(); }
+  /// "AGREES: G on the data grid ... (tol ..., ratio ...), on a dense grid ..., poles ..."
+  /// or "DISAGREES: ..." with what failed first.
   std::string summary() const;
 };
 

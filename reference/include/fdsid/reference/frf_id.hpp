@@ -33,6 +33,18 @@ struct FrfOptions {
   int r = 0;                                   ///< r > n_a (required)
   std::string continuous_method = "bilinear";  ///< "bilinear" (Alg. 2.1) or "orthogonal" (Alg. 2.2); ignored for discrete
   Real omega_scale = 0;                        ///< ω_scale; 0 = sqrt(ω_min ω_max)
+  /// Verification only (what `fdsid check` uses to measure how far rounding
+  /// moves the result): > 0 moves each row of Z = [𝐔^re; 𝐘^re] of step 1a
+  /// (a column of the Zᵀ that step 1b factors) by backward_perturbation times
+  /// its norm, and C_Y by backward_perturbation times ‖C_Y‖_F (symmetrically),
+  /// each in a random direction drawn from `perturbation_seed`: the
+  /// column-wise backward error model of a Householder QR of Zᵀ and of a
+  /// Cholesky factorisation of C_Y (Higham 2002, Thms 19.4 and 10.3); for
+  /// Algorithm 2.2 also the recurrence matrix H of the orthogonal basis, by
+  /// backward_perturbation times ‖H‖_F (the rounding of the inner products
+  /// that give it). 0: none.
+  Real backward_perturbation = 0;
+  unsigned perturbation_seed = 1;
 };
 
 /// What identify_frf returns.
