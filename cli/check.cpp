@@ -53,6 +53,13 @@ void register_check(CLI::App& app, Action& chosen) {
       ->check(CLI::IsMember({"bilinear", "orthogonal"}));
   chk->add_option("--omega-scale", q.omega_scale, "FRF/records, continuous time: omega_scale when the JSON has none")
       ->check(CLI::PositiveNumber);
+  auto* eiv = chk->add_flag("--eiv", q.eiv, "records: the candidate was identified with --eiv (when its JSON has no source)");
+  chk->add_flag("--eiv-model-variance", q.eiv_model_variance, "records: ... with --eiv --eiv-variance model")->needs(eiv);
+  auto* improper = chk->add_flag("--improper", q.improper, "records: ... with --improper (the candidate is 1/G)");
+  eiv->excludes(improper)->needs(meta);
+  improper->needs(meta);
+  chk->add_option("--min-input-snr", q.min_input_snr, "records, --eiv/--improper: the line rule's SNR (default 10)")
+      ->check(CLI::PositiveNumber);
   on_parsed(chk, c, chosen, run);
 }
 

@@ -175,7 +175,8 @@ reference::Real exact(double x) {
 
 // Periodic records read by fast/'s reader, turned into the reference's sample
 // means and variances over the periods (Pintelon 2002 Section 4.1) in 50 digits.
-reference::FrfData records_high(const FrfHighRequest& q, const std::string& domain, reference::Real& sample_time) {
+reference::SampleStatistics records_high(const FrfHighRequest& q, const std::string& domain,
+                                         reference::Real& sample_time) {
   int inputs = 0;
   const Eigen::MatrixXd samples = read_records_csv(q.data_path, inputs);
   const RecordMeta meta = read_meta(q.meta_path);
@@ -195,7 +196,7 @@ reference::FrfData records_high(const FrfHighRequest& q, const std::string& doma
   const reference::Real two_pi = boost::multiprecision::atan(reference::Real(1)) * 8;
   for (int k : meta.excited_lines)
     omega.push_back(two_pi * k / meta.period / (q.continuous ? sample_time : reference::Real(1)));
-  return reference::sample_statistics(domain, omega, U_l, Y_l).data;
+  return reference::sample_statistics(domain, omega, U_l, Y_l);
 }
 
 // The identified model's JSON, every number a 40-digit decimal string.
@@ -229,8 +230,6 @@ reference::FrfResult reference_frf(const FrfHighRequest& q, const reference::Rea
   reference::FrfResult res;
   reference::Real sample_time = 1;
   try {
-    const reference::FrfData data =
-        !q.frf_path.empty() ? reference::read_frf_csv(q.frf_path, domain) : records_high(q, domain, sample_time);
     reference::FrfOptions o;
     o.order = q.order;
     o.r = q.r;
@@ -238,7 +237,31 @@ reference::FrfResult reference_frf(const FrfHighRequest& q, const reference::Rea
     if (q.omega_scale > 0) o.omega_scale = exact(q.omega_scale);
     o.backward_perturbation = perturbation;
     o.perturbation_seed = seed;
-    res = reference::identify_frf(data, o);
+    if (!q.frf_path.empty()) {
+      res = reference::identify_frf(reference::read_frf_csv(q.frf_path, domain), o);
+    } else {
+      const reference::SampleStatistics stats = records_high(q, domain, sample_time);
+      // Section 5 as identify-frf applies it (workflow.hpp, identify_frf_records).
+      reference::RatioOptions ratio;
+      ratio.min_input_snr = exact(q.min_input_snr);
+      ratio.swap = q.treatment == RecordTreatment::Improper;
+      switch (q.treatment) {
+        case RecordTreatment::Plain:
+          res = reference::identify_frf(stats.data, o);
+          break;
+        case RecordTreatment::Improper:
+          res = reference::identify_frf(reference::ratio_estimate(stats, ratio), o);
+          break;
+        case RecordTreatment::ErrorsInVariables:
+          res = reference::identify_frf(reference::ratio_estimate(stats, ratio), o);
+          if (q.eiv_variance == EivVariance::Model) {  // Eq. (31) again at the first-pass model
+            ratio.first_pass = &res.model;
+            const reference::FrfData second = reference::ratio_estimate(stats, ratio);
+            res = reference::identify_frf(second, o);
+          }
+          break;
+      }
+    }
   } catch (const reference::StepError& e) {
     throw Error(ErrorKind::Numerical, where, std::string("reference: ") + e.what());
   } catch (const reference::Error& e) {
@@ -302,15 +325,58 @@ std::string candidate_method(const json& cj, const std::string& model_path) {
 
 }  // namespace
 
+namespace {
+
+// How the candidate treated periodic records (Section 5): from its JSON's
+// "source" (identify-frf writes it) or, without one, from the options.
+struct RecordSettings {
+  RecordTreatment treatment = RecordTreatment::Plain;
+  EivVariance eiv_variance = EivVariance::Data;
+  double min_input_snr = 10;
+};
+
+RecordSettings record_settings(const json& cj, const FrfCheckRequest& q) {
+  RecordSettings s;
+  const bool has_source = cj.contains("source") && cj["source"].is_object() && cj["source"].contains("data");
+  if (!has_source) {
+    s.treatment = q.eiv ? RecordTreatment::ErrorsInVariables
+                  : q.improper ? RecordTreatment::Improper
+                               : RecordTreatment::Plain;
+    s.eiv_variance = q.eiv_model_variance ? EivVariance::Model : EivVariance::Data;
+    if (q.min_input_snr > 0) s.min_input_snr = q.min_input_snr;
+    return s;
+  }
+  const json& src = cj["source"];
+  const json* treated = src.contains("errors_in_variables") ? &src["errors_in_variables"]
+                        : src.contains("improper")          ? &src["improper"]
+                                                            : nullptr;
+  s.treatment = src.contains("errors_in_variables") ? RecordTreatment::ErrorsInVariables
+                : src.contains("improper")          ? RecordTreatment::Improper
+                                                    : RecordTreatment::Plain;
+  if (treated && treated->is_object()) {
+    if (treated->contains("variance") && (*treated)["variance"].is_string() &&
+        (*treated)["variance"].get<std::string>().find("first-pass model") != std::string::npos)
+      s.eiv_variance = EivVariance::Model;
+    if (treated->contains("min_input_snr") && (*treated)["min_input_snr"].is_number())
+      s.min_input_snr = (*treated)["min_input_snr"].get<double>();
+  }
+  const bool json_eiv = s.treatment == RecordTreatment::ErrorsInVariables;
+  const bool json_improper = s.treatment == RecordTreatment::Improper;
+  if ((q.eiv && !json_eiv) || (q.improper && !json_improper) || (q.eiv_model_variance && s.eiv_variance != EivVariance::Model) ||
+      (q.min_input_snr > 0 && q.min_input_snr != s.min_input_snr))
+    throw Error(ErrorKind::Input, "--eiv/--improper/--eiv-variance/--min-input-snr",
+                "contradict the candidate's \"source\" (" + src.dump() +
+                    "); drop the options: check repeats what the candidate JSON says it did");
+  return s;
+}
+
+}  // namespace
+
 int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
   const json cj = read_candidate(q.model_path);
   const StateSpace candidate = model_from_json(cj, q.model_path);
   if (candidate.order() < 1) throw Error(ErrorKind::Input, q.model_path, "candidate has order 0");
-  if (cj.contains("source") && cj["source"].is_object() &&
-      (cj["source"].contains("errors_in_variables") || cj["source"].contains("improper")))
-    throw Error(ErrorKind::Input, q.model_path,
-                "was identified with --eiv or --improper, which check does not cover yet; check a candidate of "
-                "the plain sample-subspace estimate");
+  const RecordSettings rec = record_settings(cj, q);
   const Domain domain = candidate.domain;
   const std::string jm = candidate_method(cj, q.model_path);
   if (domain == Domain::Discrete && (jm == "bilinear" || jm == "orthogonal"))
@@ -334,7 +400,11 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
   // The data, read and checked by fast/'s readers (one line naming the cause).
   const bool from_frf = !q.frf_path.empty();
   const std::string where = from_frf ? q.frf_path : q.data_path;
+  if (from_frf && rec.treatment != RecordTreatment::Plain)
+    throw Error(ErrorKind::Input, q.model_path, "was identified with --eiv or --improper, which need periodic "
+                                                "records: give --data RECORDS.csv --meta META.json");
   FrfData data;
+  SampleStatistics stats;
   if (from_frf) {
     data = read_frf_csv(q.frf_path, domain);
   } else {
@@ -347,10 +417,11 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
                   fmt(candidate.sample_time, 10) + " differs from the records' " + fmt(meta.sample_time, 10) + " (" +
                       q.meta_path + "): the candidate was identified from other data");
     try {
-      data = record_statistics(samples, inputs, meta, domain).data;
+      stats = record_statistics(samples, inputs, meta, domain);
     } catch (const Error& e) {
       throw e.within(q.data_path + " with " + q.meta_path);
     }
+    data = stats.data;
   }
   if (candidate.inputs() != data.inputs() || candidate.outputs() != data.outputs())
     throw Error(ErrorKind::Input, q.model_path,
@@ -359,18 +430,28 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
                     std::to_string(data.outputs()));
   if (domain == Domain::Continuous && ws == 0) ws = std::sqrt(data.omega.minCoeff() * data.omega.maxCoeff());
 
-  if (r == 0) {  // r as identify-frf chooses it at the candidate's order
+  if (r == 0 || rec.treatment != RecordTreatment::Plain) {
+    // r as identify-frf chooses it at the candidate's order, and the data after
+    // Section 5's treatment (the frequencies that remain after Eq. 34).
     FrfOptions o;
     o.order = candidate.order();
+    o.r = r;
     o.continuous = method;
     o.omega_scale = ws;
     try {
-      r = select_order_and_r(data, o).r;
+      if (from_frf) {
+        r = select_order_and_r(data, o).r;
+      } else {
+        FrfRun run = identify_frf_records(stats, o, rec.treatment, rec.eiv_variance, rec.min_input_snr);
+        data = std::move(run.data);
+        if (r == 0) r = run.result.r;
+      }
     } catch (const Error& e) {
       throw e.within(where);
     }
-    note += "r = " + std::to_string(r) +
-            " by fdsid's V_SUB selection (Pintelon 2002 Section 5; the candidate JSON has no r, give --r); ";
+    if (o.r == 0)
+      note += "r = " + std::to_string(r) +
+              " by fdsid's V_SUB selection (Pintelon 2002 Section 5; the candidate JSON has no r, give --r); ";
   }
 
   FrfHighRequest hq;
@@ -382,6 +463,9 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
   hq.omega_scale = ws;
   hq.order = candidate.order();
   hq.r = r;
+  hq.treatment = rec.treatment;
+  hq.eiv_variance = rec.eiv_variance;
+  hq.min_input_snr = rec.min_input_snr;
   const reference::FrfResult res = reference_frf(hq);
 
   FrfOracleCheck k;

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "fdsid/spectrum_id.hpp"
+#include "fdsid/workflow.hpp"
 
 namespace fdsid::cli {
 
@@ -32,6 +33,9 @@ struct FrfCheckRequest {
   std::string method;  ///< "", "bilinear" or "orthogonal"
   double omega_scale = 0;
   double tolerance = 0;  ///< 0: the derived rule
+  /// Records: --eiv / --improper / --eiv-variance model / --min-input-snr when the candidate JSON has no "source".
+  bool eiv = false, improper = false, eiv_model_variance = false;
+  double min_input_snr = 0;  ///< 0: from the JSON, else 10 (identify-frf's default)
 };
 
 /// Identify with the reference at the candidate's settings and compare G on
@@ -52,6 +56,10 @@ struct FrfHighRequest {
   bool orthogonal = false;
   double omega_scale = 0;
   int order = 0, r = 0;
+  /// Records only: Section 5's treatment (errors-in-variables, improper), as identify-frf applies it.
+  RecordTreatment treatment = RecordTreatment::Plain;
+  EivVariance eiv_variance = EivVariance::Data;
+  double min_input_snr = 10;
 };
 
 /// `identify-frf --precision high`: Pintelon (2002) Algorithm 1/2 in 50

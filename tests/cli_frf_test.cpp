@@ -841,6 +841,18 @@ TEST_F(CliFrf, CheckAgreesWithACorrectCandidateInEveryDomainAndMethod) {
   const RunResult r = run_fdsid({"check", "--model", path("rec.json"), "--data", path("rec.csv"), "--meta",
                                  path("rec.meta.json"), "--json", path("rec.check.json")});
   expect_verdict(r, true, read_json("rec.check.json"));
+  // Section 5's treatments of records, read from the candidate's "source".
+  for (const std::vector<std::string>& treatment :
+       {std::vector<std::string>{"--eiv"}, {"--eiv", "--eiv-variance", "model"}, {"--improper"}}) {
+    SCOPED_TRACE(treatment[0] + (treatment.size() > 1 ? " model" : ""));
+    std::vector<std::string> args = {"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
+                                     "--order", "4", "--r", "8", "--json", path("treated.json")};
+    args.insert(args.end(), treatment.begin(), treatment.end());
+    ASSERT_TRUE(Succeeded(run_fdsid(args)));
+    const RunResult t = run_fdsid({"check", "--model", path("treated.json"), "--data", path("rec.csv"), "--meta",
+                                   path("rec.meta.json"), "--json", path("treated.check.json")});
+    expect_verdict(t, true, read_json("treated.check.json"));
+  }
   // Without r in the JSON, r comes from the V_SUB selection, and the line says so.
   json bare = read_json("discrete.json");
   bare.erase("r");
@@ -886,6 +898,10 @@ TEST_F(CliFrf, CheckCatchesTheClassicMistakes) {
                             .substr(dir_.string().size() + 1));
   orth["method"] = "pintelon2002-alg2-bilinear";
   expect_disagrees("orthogonal labelled bilinear", write("orth_as_bil.json", orth.dump()), c);
+  // (An errors-in-variables estimate passed off as the plain one is not among
+  // these: on simulate-records' flat multisine, |U_k| constant and no input
+  // noise, Section 5's ratio data are the plain data scaled by one complex
+  // number per frequency of constant modulus, and both estimates coincide.)
 }
 
 TEST_F(CliFrf, CheckRefusesWhatItCannotCompare) {
@@ -906,6 +922,10 @@ TEST_F(CliFrf, CheckRefusesWhatItCannotCompare) {
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", write("cont.json", cont.dump()), "--frf", d}),
                          {"continuous-time model", "pintelon2002-alg1"}));
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cand, "--data", d, "--r", "8"}), {"--r", "--meta"}));
+  json eiv_frf = read_json("c.json");
+  eiv_frf["source"] = {{"data", "x.csv"}, {"errors_in_variables", json::object()}};
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", write("eiv_frf.json", eiv_frf.dump()), "--frf", d}),
+                         {"--eiv", "records"}));
   // Records whose sample time is not the candidate's.
   simulate(32, 4, 1e-3, "rec");
   json rec_meta = read_json("rec.meta.json");
@@ -913,6 +933,11 @@ TEST_F(CliFrf, CheckRefusesWhatItCannotCompare) {
   const std::string meta = write("half.meta.json", rec_meta.dump());
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cand, "--data", path("rec.csv"), "--meta", meta}),
                          {"sample_time", "0.5"}));
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
+                                   "--order", "4", "--r", "8", "--json", path("plain.json")})));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", path("plain.json"), "--data", path("rec.csv"), "--meta",
+                                    path("rec.meta.json"), "--eiv"}),
+                         {"contradict", "source"}));
 }
 
 }  // namespace

@@ -39,7 +39,8 @@ json to_json(const FrfSource& s) {
                                 {"min_input_snr", s.min_input_snr}};
   else if (s.treatment == RecordTreatment::Improper)
     j["improper"] = {{"represents", "inverse: the model maps output to input (1/G)"},
-                     {"dropped_lines", s.dropped_lines}};
+                     {"dropped_lines", s.dropped_lines},
+                     {"min_input_snr", s.min_input_snr}};
   return j;
 }
 

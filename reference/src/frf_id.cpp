@@ -717,7 +717,9 @@ SampleStatistics sample_statistics(const std::string& domain, const std::vector<
   return st;
 }
 
-FrfData errors_in_variables(const SampleStatistics& stats) {
+FrfData errors_in_variables(const SampleStatistics& stats) { return ratio_estimate(stats, RatioOptions{}); }
+
+FrfData ratio_estimate(const SampleStatistics& stats, const RatioOptions& o, int* dropped) {
   const FrfData& d = stats.data;
   if (stats.M < 2) throw InputError("errors_in_variables: M = " + std::to_string(stats.M) + " < 2");
   const std::size_t F = d.omega.size();
@@ -726,26 +728,43 @@ FrfData errors_in_variables(const SampleStatistics& stats) {
     throw InputError("errors_in_variables: sizes of U, Y, variance, var_U, cov_YU differ from F");
   FrfData out;
   out.domain = d.domain;
-  out.omega = d.omega;
   const Real M = Real(stats.M);
+  int drop = 0;
   for (std::size_t k = 0; k < F; ++k) {
     if (d.U[k].rows() != 1 || d.U[k].cols() != 1 || d.Y[k].rows() != 1 || d.Y[k].cols() != 1 ||
         stats.var_U[k].size() != 1 || stats.cov_YU[k].size() != 1 || d.variance[k].size() != 1)
       throw InputError("errors_in_variables: " + at(k) + ": only SISO (m = p = 1, c = 1) data");
-    const Complex U = d.U[k](0, 0), Y = d.Y[k](0, 0);
-    if (std::norm(U) == 0) throw InputError("errors_in_variables: mean input is zero at " + at(k));
-    const Complex G = Y / U;
     const Real var_Y = d.variance[k](0, 0) * M;  // σ̂²_Y (data holds σ̂²_Y / M)
     const Real& var_U = stats.var_U[k](0, 0);
-    const Complex& cov = stats.cov_YU[k](0, 0);
-    // Eq. (31), corrected: |G|²(σ²_Y/|Y|² + σ²_U/|U|² − 2Re(σ²_YU/(Y conj U))); since
-    // |G|²/(Y conj U) = conj(G)/|U|², this equals the form below, also valid at Y = 0.
-    const Real var_G =
-        (var_Y + std::norm(G) * var_U - 2 * (std::conj(G) * cov).real()) / std::norm(U);
+    const Complex& cov = stats.cov_YU[k](0, 0);  // E[δY conj δU]
+    // Numerator and denominator of the ratio: Y/U, or U/Y for the inverse system.
+    const Complex num = o.swap ? d.U[k](0, 0) : d.Y[k](0, 0), den = o.swap ? d.Y[k](0, 0) : d.U[k](0, 0);
+    const Real var_num = o.swap ? var_U : var_Y, var_den = o.swap ? var_Y : var_U;
+    const Complex cross = o.swap ? std::conj(cov) : cov;  // E[δnum conj δden]
+    if (o.min_input_snr == 0 && std::norm(den) == 0)
+      throw InputError("errors_in_variables: mean input is zero at " + at(k));
+    // Eq. (34): a line whose denominator is not above the noise is left out.
+    if (!(std::norm(den) > o.min_input_snr * var_den / M)) {
+      ++drop;
+      continue;
+    }
+    const Complex G = num / den;
+    // Eq. (31), corrected: |G|²(σ²_num/|num|² + σ²_den/|den|² − 2Re(σ²_nd/(num conj den)));
+    // since |G|²/(num conj den) = conj(G)/|den|², this equals the form below (also at
+    // num = 0), evaluated at the first-pass model's G when one is given.
+    const Complex Gv = o.first_pass ? frequency_response(*o.first_pass, d.omega[k])(0, 0) : G;
+    const Real var_G = (var_num + std::norm(Gv) * var_den - 2 * (std::conj(Gv) * cross).real()) / std::norm(den);
+    if (!(var_G > 0)) {
+      ++drop;
+      continue;
+    }
+    out.omega.push_back(d.omega[k]);
     out.U.push_back(MatrixC::Constant(1, 1, Complex(1)));
     out.Y.push_back(MatrixC::Constant(1, 1, G));
     out.variance.push_back(MatrixR::Constant(1, 1, var_G / M));
   }
+  if (dropped) *dropped = drop;
+  if (out.omega.empty()) throw InputError("errors_in_variables: every line is below the input SNR rule");
   return out;
 }
 

@@ -150,4 +150,19 @@ SampleStatistics sample_statistics(const std::string& domain, const std::vector<
 /// Throws InputError for non-SISO statistics or Û(k) = 0.
 FrfData errors_in_variables(const SampleStatistics& stats);
 
+/// The ratio estimates of Section 5 with the choices `fdsid identify-frf`
+/// offers (what `fdsid check` repeats for --eiv and --improper candidates).
+struct RatioOptions {
+  Real min_input_snr = 0;         ///< Eq. (34): lines with |den|² ≤ min_input_snr σ̂²_den / M are left out
+  const Model* first_pass = nullptr;  ///< Eq. (31) evaluated at this model's G instead of the ratio
+  bool swap = false;              ///< improper G: Ĥ = Û/Ŷ (input and output exchanged)
+};
+
+/// errors_in_variables generalised: Ĝ = Ŷ/Û (or Û/Ŷ), the variance of the
+/// corrected Eq. (31) with the roles of U and Y exchanged when swapped,
+/// evaluated at the ratio or at `first_pass`; lines failing Eq. (34) or with a
+/// variance ≤ 0 are left out and counted in `dropped`.
+/// Throws InputError as errors_in_variables, and when every line is left out.
+FrfData ratio_estimate(const SampleStatistics& stats, const RatioOptions& options, int* dropped = nullptr);
+
 }  // namespace fdsid::reference
