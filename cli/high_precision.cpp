@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <string>
 
@@ -26,10 +27,24 @@ using nlohmann::json;
 
 double to_double(const json& decimal) { return std::stod(decimal.get<std::string>()); }
 
+// The 50-digit value of a double, exactly (17 significant digits identify it).
+reference::Real exact(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", x);
+  return reference::parse_decimal(buf);
+}
+
 // Runs the reference, turning its errors into the library's typed errors
 // (input problems and failed steps both exit 2 with one line).
+// The perturbations of check's tolerance for an unperturbed result at p, r, M.
+using PerturbationsFor =
+    std::function<std::vector<reference::BackwardPerturbation>(const reference::Result&, int, int, int)>;
+
+// With `perturbations_for`: also the perturbed reruns of check's tolerance
+// into `perturbed` (steps 1-2 shared; a rerun whose step fails is left out).
 reference::Result run_reference(const std::string& data_path, int order, int& p, int& r, bool vo, Extension ext,
-                                int& m, int& M) {
+                                int& m, int& M, const PerturbationsFor* perturbations_for = nullptr,
+                                std::vector<reference::Result>* perturbed = nullptr) {
   // The file is checked by fast/'s reader first, so that a bad one gets the
   // same one-line message (file and line once, the cause named: header, grid,
   // Hermitian samples, an FRF file given as a spectrum) as without
@@ -45,7 +60,11 @@ reference::Result run_reference(const std::string& data_path, int order, int& p,
     default_pr(M, order, dp, dr);  // the same documented default rule as fast/
     if (p == 0) p = dp;
     if (r == 0) r = dr;
-    return reference::identify_spectrum(spectrum, order, p, r, vo);
+    if (!perturbations_for) return reference::identify_spectrum(spectrum, order, p, r, vo);
+    reference::PerturbedResults all = reference::identify_spectrum_perturbed(
+        spectrum, order, p, r, vo, [&](const reference::Result& base) { return (*perturbations_for)(base, p, r, M); });
+    *perturbed = std::move(all.perturbed);
+    return all.base;
   } catch (const reference::StepError& e) {
     throw Error(ErrorKind::Numerical, data_path, std::string("reference: ") + e.what());
   } catch (const reference::Error& e) {
@@ -111,9 +130,22 @@ int check(const std::string& json_path, const std::string& model_path, const std
   int m = 0, M = 0;
   const int p_given = p, r_given = r;
   std::string note;
+  // The reruns of the tolerance (workflow.hpp, set_oracle_tolerances): the
+  // backward errors of a correct double implementation, three random directions.
+  const PerturbationsFor perturbations_for = [&](const reference::Result& base, int pp, int rr, int MM) {
+    std::vector<reference::BackwardPerturbation> bp;
+    if (tolerance > 0) return bp;
+    const Eigen::VectorXcd z = zeros(model_from_json(reference::result_to_json(base, vo, 40), "reference model"));
+    const OracleBackwardErrors e =
+        oracle_backward_errors(pp, rr, base.model.C.rows(), MM, base.order, z.size() ? z.cwiseAbs().maxCoeff() : 0.0);
+    for (unsigned seed = 1; seed <= 3; ++seed)
+      bp.push_back({exact(e.data_matrix), exact(e.least_squares), exact(e.riccati), seed, nullptr});
+    return bp;
+  };
+  std::vector<reference::Result> moved;
   reference::Result res;
   try {
-    res = run_reference(data_path, candidate.order(), p, r, vo, ext, m, M);
+    res = run_reference(data_path, candidate.order(), p, r, vo, ext, m, M, &perturbations_for, &moved);
   } catch (const Error& e) {
     if (e.kind() != ErrorKind::Numerical) throw;
     // The reference cannot identify these data at the candidate's order (a
@@ -123,7 +155,7 @@ int check(const std::string& json_path, const std::string& model_path, const std
     // candidate is compared with that model (the orders then differ).
     p = p_given;
     r = r_given;
-    res = run_reference(data_path, 0, p, r, vo, ext, m, M);
+    res = run_reference(data_path, 0, p, r, vo, ext, m, M, &perturbations_for, &moved);
     if (res.order == candidate.order()) throw;
     const std::string what = e.what();
     const auto at = what.find("step ");
@@ -144,11 +176,16 @@ int check(const std::string& json_path, const std::string& model_path, const std
   k.comparison = compare_models(candidate, ref);
 
   // Default tolerance: what a correct double-precision implementation reaches on
-  // these data (compare.hpp), with sigma1/sigma_2n from the reference's singular
-  // values; poles, Markov parameters and the factor get condition numbers on top (workflow.hpp).
-  const int n = res.order;
-  const json& sv = k.reference_model["singular_values"];
-  set_oracle_tolerances(k, ref, m, 2 * M, to_double(sv[0]) / to_double(sv[2 * n - 1]), tolerance);
+  // these data, measured: the reference again, three times, with that
+  // implementation's backward errors in random directions (workflow.hpp).
+  std::vector<StateSpace> perturbed;
+  for (const reference::Result& x : moved)
+    perturbed.push_back(model_from_json(reference::result_to_json(x, vo, 40), "perturbed reference model"));
+  if (tolerance <= 0 && perturbed.empty())
+    throw Error(ErrorKind::Numerical, data_path,
+                "the reference fails whenever these data are perturbed at rounding level, so no tolerance can be "
+                "measured; give --tolerance");
+  set_oracle_tolerances(k, ref, perturbed, tolerance);
   if (json_path != "-") std::cout << k.summary();
   if (!json_path.empty()) write_text_file(json_path, to_json(k).dump(2) + "\n");
   return k.agree() ? 0 : 1;
@@ -166,12 +203,6 @@ int sample_spectrum_high(const std::string& model_path, int M, const std::string
 
 namespace {
 
-// The 50-digit value of a double, exactly (17 significant digits identify it).
-reference::Real exact(double x) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return reference::parse_decimal(buf);
-}
 
 // Periodic records read by fast/'s reader, turned into the reference's sample
 // means and variances over the periods (Pintelon 2002 Section 4.1) in 50 digits.

@@ -1,16 +1,23 @@
 #!/usr/bin/env bash
-# The tightness of `fdsid check`'s derived FRF tolerance (issue 13): for each
-# case, fdsid's own double-precision identify-frf is the candidate and the
-# 50-digit reference the oracle; tightness = tolerance / distance for each
-# compared quantity (G on the data grid, G on a dense grid, the poles), of
-# which the smallest is printed (>= 1: the candidate agrees; the target is a
-# tolerance within 100 x what a correct implementation reaches).
+# The tightness of `fdsid check`'s measured tolerances (issue 13): for each
+# case, fdsid's own double-precision identify-spectrum / identify-frf is the
+# candidate and the 50-digit reference the oracle; tightness = tolerance /
+# distance for each compared quantity (>= 1: the candidate agrees; the target
+# is a tolerance within 100 x what a correct implementation reaches).
 # usage: bash scripts/check-tightness.sh [path/to/fdsid]   (needs python3)
 set -euo pipefail
 fdsid=${1:-build/fdsid}
 here=$(cd "$(dirname "$0")" && pwd)
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
+# One table row: the case, check's exit status, tolerance / distance per quantity of $tmp/k.json.
+tightness_line() {
+  python3 -c "
+import json
+q = json.load(open('$tmp/k.json'))['quantities']
+t = ['%.3g' % (x['tolerance'] / x['distance']) if x['distance'] > 0 else 'inf' for x in q]
+print('%-34s %-4s %s' % ('$1', '$2', ', '.join(t)))"
+}
 printf '%-34s %-4s %-28s\n' "case (kind n par F noise r method)" "exit" "tightness: G data, G dense, poles"
 while read -r kind n par F rel r method; do
   [ -z "$kind" ] && continue
@@ -22,11 +29,7 @@ while read -r kind n par F rel r method; do
   "$fdsid" check --model "$tmp/c.json" --frf "$tmp/d.csv" --json "$tmp/k.json" > /dev/null
   rc=$?
   set -e
-  python3 -c "
-import json, sys
-q = json.load(open('$tmp/k.json'))['quantities']
-t = ['%.3g' % (x['tolerance'] / x['distance']) if x['distance'] > 0 else 'inf' for x in q]
-print('%-34s %-4s %s' % ('$kind $n $par $F $rel $r $method', '$rc', ', '.join(t)))"
+  tightness_line "$kind $n $par $F $rel $r $method" "$rc"
 done <<'CASES'
 d 4 0.9 100 1e-2 8 bilinear
 d 4 0.99 200 1e-2 8 bilinear
@@ -41,4 +44,35 @@ c 8 0.02 300 0 16 bilinear
 c 6 0.05 200 1e-3 12 orthogonal
 c 4 0.01 200 0 8 orthogonal
 c 6 0.01 300 0 12 orthogonal
+CASES
+
+# Spectra (Akcay 2011): noise-free samples in 50 digits of the bundled systems
+# and of a pole pair at radius 0.99, and the bundled noisy spectrum.
+cat > "$tmp/r99.json" <<'EOF'
+{"domain":"discrete","sample_time":1,"A":[[1.4004,-0.9801],[1,0]],"B":[[1],[0]],"C":[[0.3,0.2]],"D":[[1]]}
+EOF
+printf '\n%-34s %-4s %s\n' "spectrum case (model M)" "exit" "tightness: poles, spectrum, summand Markov, factor zeros, factor Markov"
+root="$here/.."
+while read -r model M order; do
+  [ -z "$model" ] && continue
+  if [ "$M" = file ]; then
+    data="$root/$model"
+  else
+    model_path="$root/$model"
+    [ "$model" = r99 ] && model_path="$tmp/r99.json"
+    "$fdsid" sample-spectrum --model "$model_path" --M "$M" --precision high --out "$tmp/s.csv"
+    data="$tmp/s.csv"
+  fi
+  "$fdsid" identify-spectrum --data "$data" --order "$order" --json "$tmp/c.json" > /dev/null
+  set +e
+  "$fdsid" check --model "$tmp/c.json" --data "$data" --json "$tmp/k.json" > /dev/null
+  rc=$?
+  set -e
+  tightness_line "$(basename "$model") $M" "$rc"
+done <<'CASES'
+fixtures/systems/akcay2011.json 64 4
+fixtures/systems/akcay2011.json 1000 4
+r99 200 2
+fixtures/systems/mimo2x2_example.json 64 3
+data/akcay2011_M1000_eps1e-3.csv file 4
 CASES

@@ -96,7 +96,7 @@ TEST(Json, OracleCheckVerdict) {
   k.comparison.pole_distance = 1e-9;
   k.comparison.spectrum_error = 1e-10;
   k.comparison.markov_error = 1e-9;
-  set_oracle_tolerances(k, first_order(0.5), 1, 64, 10.0, 1e-8);
+  set_oracle_tolerances(k, first_order(0.5), {}, 1e-8);
   EXPECT_TRUE(k.agree());
   EXPECT_EQ(to_json(k)["tolerance"]["rule"], "given by --tolerance");
   // Per quantity: distance, tolerance, ratio (issue 13: the tightness of the oracle).

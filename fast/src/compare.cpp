@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <tuple>
 #include <utility>
 
@@ -143,6 +144,23 @@ double transfer_sensitivity(const StateSpace& m, cplx xi) {
   if (!RB.allFinite() || !CR.allFinite()) return std::numeric_limits<double>::infinity();
   return norm2(CR) * norm2(m.A.cast<cplx>()) * norm2(RB) + norm2(m.C.cast<cplx>()) * norm2(RB) +
          norm2(CR) * norm2(m.B.cast<cplx>()) + norm2(m.D.cast<cplx>());
+}
+
+std::vector<StateSpace> randomly_moved(const StateSpace& model, double size, int count) {
+  std::vector<StateSpace> out;
+  for (int i = 1; i <= count; ++i) {
+    std::mt19937_64 rng(i);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    StateSpace moved = model;
+    for (Eigen::MatrixXd* X : {&moved.A, &moved.B, &moved.C, &moved.D}) {
+      if (X->size() == 0) continue;
+      Eigen::MatrixXd g(X->rows(), X->cols());
+      for (Eigen::Index k = 0; k < g.size(); ++k) g(k) = normal(rng);
+      *X += size * X->norm() / g.norm() * g;
+    }
+    out.push_back(moved);
+  }
+  return out;
 }
 
 Eigen::VectorXd dense_frequency_grid(Domain domain, const Eigen::VectorXd& data_omega, int points) {

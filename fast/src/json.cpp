@@ -132,7 +132,7 @@ json oracle_quantities(const OracleCheck& k) {
   const std::pair<const char*, std::pair<double, double>> q[] = {
       {"poles", {c.pole_distance, k.pole_tolerance}},
       {"spectrum", {c.spectrum_error, k.spectrum_tolerance}},
-      {"summand_markov", {c.markov_error, k.pole_tolerance}},
+      {"summand_markov", {c.markov_error, k.markov_tolerance}},
       {"factor_zeros", {c.zero_distance, k.zero_tolerance}},
       {"factor_markov", {c.factor_markov_error, k.factor_tolerance}}};
   json out = json::array();
@@ -171,15 +171,17 @@ json to_json(const OracleCheck& k) {
           {"note", k.note},
           {"tolerance",
            {{"spectrum", k.spectrum_tolerance},
-            {"poles_and_markov", k.pole_tolerance},
+            {"poles", k.pole_tolerance},
+            {"summand_markov", k.markov_tolerance},
             {"factor_markov", k.factor_tolerance},
             {"factor_zeros", k.zero_tolerance},
-            {"rule", k.tolerance_given ? "given by --tolerance"
-                                       : "4 (p + r) m log2(N) u sigma1/sigma2n (spectrum), times the eigenvalue "
-                                         "condition number of A for poles and Markov parameters, over "
-                                         "1 - rho_z^2 for the factor's Markov parameters (rho_z: the largest zero "
-                                         "modulus), times the eigenvalue condition number of A - B D^-1 C for its "
-                                         "zeros"}}},
+            {"rule", k.tolerance_given
+                         ? "given by --tolerance"
+                         : "10 x (the largest change of each quantity when the reference is rerun with the "
+                           "backward errors of a correct double implementation in 3 random directions: "
+                           "Y by (log2 N + sqrt(pm rm)) u, step 8 by sqrt(rows cols) u, E and F by 4 n u; plus "
+                           "the largest change when the reference model's A, B, C, D move by 4 n u) "
+                           "(fdsid/workflow.hpp, set_oracle_tolerances)"}}},
           {"reference_model", k.reference_model}};
 }
 

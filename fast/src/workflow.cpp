@@ -100,19 +100,50 @@ std::string FrfOracleCheck::summary() const {
   return out;
 }
 
-void set_oracle_tolerances(OracleCheck& check, const StateSpace& reference, int m, int N, double sigma1_over_sigma2n,
+OracleBackwardErrors oracle_backward_errors(int p, int r, int m, int M, int n, double rho_z) {
+  constexpr double u = std::numeric_limits<double>::epsilon() / 2;
+  OracleBackwardErrors e;
+  e.data_matrix = (std::log2(2.0 * M) + std::sqrt(double(p) * m * r * m)) * u;
+  e.least_squares = std::sqrt(2.0 * (M + 1) * m * m * (m * (m + 1) / 2.0 + double(n) * m)) * u;
+  // Doubling steps to converge: the closed loop's powers A_z^(2^k) fall below u
+  // when 2^k ln(rho_z^2) <= ln u.
+  int steps = 1;
+  if (rho_z > 0 && rho_z < 1) steps += static_cast<int>(std::ceil(std::log2(std::log(u) / std::log(rho_z * rho_z))));
+  e.riccati = 4.0 * std::max(1, n) * std::max(1, steps) * u;
+  return e;
+}
+
+void set_oracle_tolerances(OracleCheck& check, const StateSpace& reference, const std::vector<StateSpace>& perturbed,
                            double tolerance) {
   check.tolerance_given = tolerance > 0;
   if (check.tolerance_given) {
-    check.spectrum_tolerance = check.pole_tolerance = check.factor_tolerance = check.zero_tolerance = tolerance;
+    check.spectrum_tolerance = check.pole_tolerance = check.markov_tolerance = check.factor_tolerance =
+        check.zero_tolerance = tolerance;
     return;
   }
-  check.spectrum_tolerance = double_precision_spectrum_tolerance(check.p, check.r, m, N, sigma1_over_sigma2n);
-  check.pole_tolerance = eigenvalue_condition_number(reference.A) * check.spectrum_tolerance;
-  const Eigen::MatrixXd Az = reference.A - reference.B * reference.D.partialPivLu().solve(reference.C);
-  const double rho_z = reference.order() ? Az.eigenvalues().cwiseAbs().maxCoeff() : 0.0;
-  check.factor_tolerance = check.pole_tolerance / (1 - rho_z * rho_z);
-  check.zero_tolerance = eigenvalue_condition_number(Az) * check.factor_tolerance;
+  if (perturbed.empty())
+    throw Error(ErrorKind::Input, "set_oracle_tolerances", "needs perturbed reference models or a tolerance");
+  constexpr double u = std::numeric_limits<double>::epsilon() / 2;
+  // The largest move of each quantity over a set of models.
+  struct Moves {
+    double poles = 0, spectrum = 0, markov = 0, zeros = 0, factor = 0;
+    void add(const ModelComparison& c) {
+      poles = std::max(poles, c.pole_distance);
+      spectrum = std::max(spectrum, c.spectrum_error);
+      markov = std::max(markov, c.markov_error);
+      zeros = std::max(zeros, c.zero_distance);
+      factor = std::max(factor, c.factor_markov_error);
+    }
+  } algorithm, rounding;
+  for (const StateSpace& p : perturbed) algorithm.add(compare_models(p, reference));
+  for (const StateSpace& p : randomly_moved(reference, 4.0 * std::max(1, reference.order()) * u, 3))
+    rounding.add(compare_models(p, reference));
+  constexpr double kSafety = FrfTolerance::kSafety;
+  check.pole_tolerance = kSafety * (algorithm.poles + rounding.poles);
+  check.spectrum_tolerance = kSafety * (algorithm.spectrum + rounding.spectrum);
+  check.markov_tolerance = kSafety * (algorithm.markov + rounding.markov);
+  check.zero_tolerance = kSafety * (algorithm.zeros + rounding.zeros);
+  check.factor_tolerance = kSafety * (algorithm.factor + rounding.factor);
 }
 
 FitVerdict fit_verdict(const FrfResult& result, const FrfData& data, const FrfSource& source) {
@@ -172,7 +203,7 @@ std::string OracleCheck::summary() const {
                 "%s: poles %.3e (tol %.1e), spectrum %.3e at omega = %.4f (tol %.1e), Markov R(%d) %.3e (tol %.1e), "
                 "factor zeros %.3e (tol %.1e), factor H(%d) %.3e (tol %.1e)\n",
                 agree() ? "AGREES" : "DISAGREES", c.pole_distance, pole_tolerance, c.spectrum_error,
-                c.spectrum_error_omega, spectrum_tolerance, c.markov_error_k, c.markov_error, pole_tolerance,
+                c.spectrum_error_omega, spectrum_tolerance, c.markov_error_k, c.markov_error, markov_tolerance,
                 c.zero_distance, zero_tolerance, c.factor_markov_error_k, c.factor_markov_error, factor_tolerance);
   return out + line;
 }

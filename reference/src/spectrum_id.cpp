@@ -17,6 +17,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <random>
 #include <limits>
 #include <sstream>
 
@@ -337,6 +338,18 @@ StablePart step7_A_C(const Eigensystem& eig, const MatrixR& U2n, int n, int m, i
 }
 
 // ---------------------------------------------------------------------------
+// BackwardPerturbation: X moved by size × ‖X‖_F in a random direction
+// (Gaussian entries, normalised; `symmetric` keeps X = Xᵀ).
+void move(MatrixR& X, const Real& size, std::mt19937_64& rng, bool symmetric = false) {
+  if (!(size > 0) || X.size() == 0) return;
+  std::normal_distribution<double> normal(0.0, 1.0);
+  MatrixR g(X.rows(), X.cols());
+  for (Eigen::Index i = 0; i < g.rows(); ++i)
+    for (Eigen::Index j = 0; j < g.cols(); ++j) g(i, j) = Real(normal(rng));
+  if (symmetric) g = (g + g.transpose()).eval();
+  X += size * X.norm() / g.norm() * g;
+}
+
 // Step 8: Ê, F̂ by linear least squares
 
 // The real linear least-squares problem L θ ≈ rhs of step 8.
@@ -402,10 +415,21 @@ struct SpectralSummands {
 // min |R_ii| ≤ 1e-40 max |R_ii|. Fails: StepError(8) when rank deficient.
 // References: Akçay (2011) step 8; Akçay & Türkay (2004).
 SpectralSummands step8_least_squares_EF(const Spectrum& spectrum, const MatrixR& A_hat,
-                                        const MatrixR& C_hat) {
+                                        const MatrixR& C_hat, const Real& perturbation = 0,
+                                        std::mt19937_64* rng = nullptr) {
   const int m = spectrum.m;
   const int n = static_cast<int>(A_hat.rows());
-  const LeastSquaresProblem ls = step8_design_matrix(spectrum, A_hat, C_hat);
+  LeastSquaresProblem ls = step8_design_matrix(spectrum, A_hat, C_hat);
+  if (rng && perturbation > 0) {  // BackwardPerturbation::least_squares, column by column
+    for (Eigen::Index j = 0; j < ls.L.cols(); ++j) {
+      MatrixR col = ls.L.col(j);
+      move(col, perturbation, *rng);
+      ls.L.col(j) = col;
+    }
+    MatrixR rhs = ls.rhs;
+    move(rhs, perturbation, *rng);
+    ls.rhs = rhs;
+  }
   Eigen::HouseholderQR<MatrixR> qr(ls.L);
   {
     const VectorR diagonal = qr.matrixQR().diagonal().cwiseAbs();
@@ -669,25 +693,27 @@ std::vector<Complex> eigenvalues(const MatrixR& X) {
 // ---------------------------------------------------------------------------
 // Algorithm 1
 
-Result identify_spectrum(const Spectrum& spectrum, int order, int p, int r, bool van_overschee) {
-  check_spectrum(spectrum);
-  const int m = spectrum.m;
-  check_p_r(p, r, 2 * spectrum.M);
-  if (order < 0) throw InputError("step 4: order " + std::to_string(order) + " < 0");
+namespace {
 
+// Steps 3-9 from the data matrices of step 2 (shared by identify_spectrum and
+// its perturbed reruns), with a backward perturbation when `pert` has one.
+Result steps_3_to_9(const Spectrum& spectrum, DataMatrices data, int order, int p, int r, bool van_overschee,
+                    const BackwardPerturbation& pert) {
+  const int m = spectrum.m;
+  std::mt19937_64 rng(pert.seed);
   Result result;
   result.p = p;
   result.r = r;
-
-  // Steps 1-2: extension, Section 3 matrices, 𝒴 (Eq. 16) and Ĝ_p F_r (Eq. 13).
-  const DataMatrices data = step2_data_matrices(spectrum, p, r);
+  move(van_overschee ? data.GF : data.Y, pert.data_matrix, rng);
   const MatrixR& H = van_overschee ? data.GF : data.Y;
 
   // Step 3 (of Ĝ_p F_r instead of 𝒴 for Van Overschee's method); both sets of
   // singular values are reported.
   const RangeSpace range = step3_range_space(H);
-  result.singular_values_Y = van_overschee ? singular_values(data.Y) : range.sigma;
-  result.singular_values_vo = van_overschee ? range.sigma : singular_values(data.GF);
+  // (A perturbed rerun reports only what it estimates: the other matrix's SVD is skipped.)
+  const bool rerun = pert.data_matrix > 0 || pert.least_squares > 0 || pert.riccati > 0;
+  result.singular_values_Y = van_overschee ? (rerun ? std::vector<Real>{} : singular_values(data.Y)) : range.sigma;
+  result.singular_values_vo = van_overschee ? range.sigma : (rerun ? std::vector<Real>{} : singular_values(data.GF));
 
   // Step 4.
   const int n = step4_order(range.sigma, order, p, r, static_cast<int>(std::min(H.rows(), H.cols())));
@@ -700,9 +726,16 @@ Result identify_spectrum(const Spectrum& spectrum, int order, int p, int r, bool
   result.poles = stable.poles;
 
   // Steps 8-9.
-  const SpectralSummands EF = step8_least_squares_EF(spectrum, stable.A_hat, stable.C_hat);
+  SpectralSummands EF = step8_least_squares_EF(spectrum, stable.A_hat, stable.C_hat, pert.least_squares, &rng);
+  move(EF.E, pert.riccati, rng, true);
+  move(EF.F, pert.riccati, rng);
   const RiccatiMap f{stable.A_hat, stable.C_hat, EF.E, EF.F};
-  result.P = step9_riccati(f, n, &result.riccati_iterations);
+  if (pert.riccati_start && pert.riccati_start->rows() == n) {
+    result.P = step9b_newton(f, *pert.riccati_start, &result.riccati_iterations);
+    step9_check_solution(f, result.P);
+  } else {
+    result.P = step9_riccati(f, n, &result.riccati_iterations);
+  }
   result.model.A = stable.A_hat;
   step9_B_D(f, result.P, &result.model.B, &result.model.D);
   result.model.C = stable.C_hat;
@@ -710,6 +743,40 @@ Result identify_spectrum(const Spectrum& spectrum, int order, int p, int r, bool
   result.F = EF.F;
   // Step 10: Ĝ(z), Ŝ_M(z) follow from result.model (Eqs. 10, 8; spectrum_of).
   return result;
+}
+
+// Steps 1-2: extension, Section 3 matrices, 𝒴 (Eq. 16) and Ĝ_p F_r (Eq. 13).
+DataMatrices steps_1_2(const Spectrum& spectrum, int order, int p, int r) {
+  check_spectrum(spectrum);
+  check_p_r(p, r, 2 * spectrum.M);
+  if (order < 0) throw InputError("step 4: order " + std::to_string(order) + " < 0");
+  return step2_data_matrices(spectrum, p, r);
+}
+
+}  // namespace
+
+Result identify_spectrum(const Spectrum& spectrum, int order, int p, int r, bool van_overschee,
+                         const BackwardPerturbation* perturbation) {
+  const BackwardPerturbation none;
+  return steps_3_to_9(spectrum, steps_1_2(spectrum, order, p, r), order, p, r, van_overschee,
+                      perturbation ? *perturbation : none);
+}
+
+PerturbedResults identify_spectrum_perturbed(
+    const Spectrum& spectrum, int order, int p, int r, bool van_overschee,
+    const std::function<std::vector<BackwardPerturbation>(const Result&)>& perturbations_for) {
+  const DataMatrices data = steps_1_2(spectrum, order, p, r);
+  PerturbedResults out;
+  out.base = steps_3_to_9(spectrum, data, order, p, r, van_overschee, BackwardPerturbation{});
+  for (BackwardPerturbation pert : perturbations_for(out.base)) {
+    pert.riccati_start = &out.base.P;
+    try {
+      out.perturbed.push_back(steps_3_to_9(spectrum, data, out.base.order, p, r, van_overschee, pert));
+    } catch (const StepError& e) {
+      out.failures.push_back(e.what());
+    }
+  }
+  return out;
 }
 
 }  // namespace fdsid::reference

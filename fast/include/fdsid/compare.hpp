@@ -4,6 +4,8 @@
 #include "fdsid/frf_id.hpp"
 #include "fdsid/model.hpp"
 
+#include <vector>
+
 namespace fdsid {
 
 /// Accuracy a backward-stable double-precision Algorithm 1 reaches on
@@ -79,6 +81,12 @@ struct OracleQuantity {
   double omega = 0;  ///< G: where the ratio is largest (the data's units); poles: unused
   bool agrees() const { return ratio <= 1.0; }
 };
+
+/// Purpose: copies of a model with A, B, C, D each moved by `size` times its
+/// Frobenius norm in independent random directions (fixed seeds 1..count):
+/// the rounding model of the oracle's tolerances.
+/// Fails: never.
+std::vector<StateSpace> randomly_moved(const StateSpace& model, double size, int count);
 
 /// Purpose: first-order sensitivity s(ξ) of G(ξ) = D + C (ξI − A)⁻¹ B to
 /// relative perturbations of size 1 in each of A, B, C, D (‖δX‖ ≤ ‖X‖).

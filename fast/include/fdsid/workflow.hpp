@@ -151,7 +151,7 @@ struct OracleCheck {
   Method method = Method::Akcay2011;
   Extension extension = Extension::HermitianPart;
   ModelComparison comparison;
-  double spectrum_tolerance = 0, pole_tolerance = 0;
+  double spectrum_tolerance = 0, pole_tolerance = 0, markov_tolerance = 0;  ///< markov: the summands' R(k)
   double factor_tolerance = 0, zero_tolerance = 0;  ///< the spectral factor's Markov parameters and zeros
   bool tolerance_given = false;  ///< by the user, instead of the derived rule
   nlohmann::json reference_model;
@@ -161,7 +161,7 @@ struct OracleCheck {
   bool orders_agree() const { return comparison.candidate_order == comparison.reference_order; }
   bool poles_agree() const { return comparison.pole_distance <= pole_tolerance; }
   bool spectrum_agrees() const {
-    return comparison.spectrum_error <= spectrum_tolerance && comparison.markov_error <= pole_tolerance;
+    return comparison.spectrum_error <= spectrum_tolerance && comparison.markov_error <= markov_tolerance;
   }
   /// The factor: zeros and H(k) within tolerance (a reflected zero fails both).
   bool factor_agrees() const {
@@ -196,21 +196,38 @@ struct FrfOracleCheck {
   std::string summary() const;
 };
 
-/// Purpose: the tolerances of `fdsid check` and the verdict.
-/// Method: tolerance > 0 is used for everything; else
-///  - spectrum: double_precision_spectrum_tolerance(p, r, m, N, σ1/σ_2n);
-///  - poles and the summands' Markov parameters: that times κ(A), the
-///    eigenvalue condition number of the reference's A (a perturbation δ of
-///    the shift equations moves an eigenvalue by ≤ κ δ to first order);
-///  - the factor's Markov parameters H(k): the summands' tolerance over
-///    1 − ρ_z², ρ_z the reference's largest zero modulus: B and D come from
-///    the step-9 Riccati equation, whose linearisation at the stabilising
-///    solution is the Stein operator X ↦ X − A_z X A_zᵀ in the closed loop
-///    A_z = A − B D⁻¹ C (eigenvalues: the zeros), with smallest singular value
-///    ≤ 1 − ρ_z² (the same factor spectrum_id.hpp's error estimate carries);
-///  - the zeros: that times κ(A_z), as for the poles.
-/// Fails: never.
-void set_oracle_tolerances(OracleCheck& check, const StateSpace& reference, int m, int N, double sigma1_over_sigma2n,
+/// Purpose: the tolerances of `fdsid check` (spectra) and the verdict.
+/// Method: tolerance > 0 is used for every quantity. Else each compared
+/// quantity q (poles, spectrum, summands' Markov parameters, factor zeros,
+/// factor Markov parameters; compare_models) gets
+///   tol_q = 10 (max_i q(perturbed_i, reference) + max_j q(rounded_j, reference)):
+/// `perturbed` are the reference's identifications of the same spectrum with
+/// the backward errors of a correct double-precision implementation put into
+/// Algorithm 1 in random directions (reference::BackwardPerturbation, sizes
+/// from oracle_backward_errors); rounded_j are the reference's model with A,
+/// B, C, D each moved by 4n u times its norm in three random directions (the
+/// rounding of the candidate's own numbers and of evaluating them). How far
+/// these move q is what rounding does on these data to first order
+/// (statistical condition estimation, Kenney & Laub 1994); the factor 10 over
+/// three samples as in FrfTolerance (compare.hpp).
+/// Fails: Error(Input) without perturbed models and without a tolerance.
+void set_oracle_tolerances(OracleCheck& check, const StateSpace& reference, const std::vector<StateSpace>& perturbed,
                            double tolerance);
+
+/// The relative backward errors set_oracle_tolerances assumes of a correct
+/// double implementation of Algorithm 1 at p, r, m, N = 2M, order n:
+/// 𝒴 by (log2 N + √(pm · rm)) u (the FFT's error in the Fourier coefficients,
+/// Higham 2002 Thm 24.2 in its log2 N u form, plus the probabilistic backward
+/// error of the SVD, Higham & Mary 2019), step 8's design matrix, column by
+/// column, and right-hand side by √(rows · cols) u with rows = 2(M+1)m² and
+/// cols = m(m+1)/2 + nm (Householder QR), Ê and F̂ of step 9 by 4n u per
+/// step of a doubling solver (SDA, fast/'s method; a Schur-vector solver does
+/// no worse), which needs K = 1 + ⌈log2(ln u / ln ρ_z²)⌉ steps for the closed
+/// loop's powers A_z^(2^K) to fall below u (ρ_z: the reference factor's largest
+/// zero modulus, the spectral radius of A_z = A − B D⁻¹ C).
+struct OracleBackwardErrors {
+  double data_matrix = 0, least_squares = 0, riccati = 0;
+};
+OracleBackwardErrors oracle_backward_errors(int p, int r, int m, int M, int n, double rho_z);
 
 }  // namespace fdsid

@@ -34,6 +34,7 @@
 
 #include <complex>
 #include <stdexcept>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -183,7 +184,35 @@ struct Result {
 /// References: H. Akçay, Automatica 47 (2011) 363-367, Algorithm 1;
 /// H. Akçay & S. Türkay, Automatica 40 (2004) 1333-1347 (steps 4-10);
 /// P. Van Overschee et al., Automatica 33 (1997) 2147-2157.
+/// Verification only (what `fdsid check` uses to measure how far the rounding
+/// of a correct double-precision implementation moves the result; fdsid/
+/// compare.hpp): relative sizes of backward errors put into Algorithm 1, each
+/// in a random direction drawn from `seed`. 0: none.
+struct BackwardPerturbation {
+  Real data_matrix = 0;    ///< 𝒴 (or Ĝ_p F_r) of step 2 moved by this × its Frobenius norm
+  Real least_squares = 0;  ///< every column of step 8's design matrix and its right-hand side, × their norms
+  Real riccati = 0;        ///< Ê (symmetrically) and F̂ entering step 9, × their norms
+  unsigned seed = 1;
+  /// Step 9 by Newton's method from this stabilising solution of the
+  /// unperturbed problem (nullptr: the difference iteration first, as always):
+  /// a rounding-size perturbation leaves it inside Newton's basin.
+  const MatrixR* riccati_start = nullptr;
+};
+
 Result identify_spectrum(const Spectrum& spectrum, int order, int p, int r,
-                         bool van_overschee = false);
+                         bool van_overschee = false, const BackwardPerturbation* perturbation = nullptr);
+
+/// identify_spectrum, then steps 3-9 again for each perturbation that
+/// `perturbations_for` returns for the unperturbed result, steps 1-2 (the
+/// expensive direct sums) computed once. A perturbed rerun whose step fails
+/// is left out and its message listed in `failures`.
+struct PerturbedResults {
+  Result base;
+  std::vector<Result> perturbed;
+  std::vector<std::string> failures;
+};
+PerturbedResults identify_spectrum_perturbed(
+    const Spectrum& spectrum, int order, int p, int r, bool van_overschee,
+    const std::function<std::vector<BackwardPerturbation>(const Result&)>& perturbations_for);
 
 }  // namespace fdsid::reference
