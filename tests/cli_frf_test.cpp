@@ -898,6 +898,11 @@ TEST_F(CliFrf, CheckCatchesTheClassicMistakes) {
                             .substr(dir_.string().size() + 1));
   orth["method"] = "pintelon2002-alg2-bilinear";
   expect_disagrees("orthogonal labelled bilinear", write("orth_as_bil.json", orth.dump()), c);
+  // Tight (issue 13): a correct candidate with D moved by 1e-10 relative, a
+  // change of G far below the noise and below the old rule's tolerance.
+  json nudged = read_json("good.json");
+  nudged["D"][0][0] = nudged["D"][0][0].get<double>() * (1 + 1e-10);
+  expect_disagrees("D moved by 1e-10", write("nudged.json", nudged.dump()), d);
   // (An errors-in-variables estimate passed off as the plain one is not among
   // these: on simulate-records' flat multisine, |U_k| constant and no input
   // noise, Section 5's ratio data are the plain data scaled by one complex
