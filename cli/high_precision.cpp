@@ -401,54 +401,64 @@ RecordSettings record_settings(const json& cj, const FrfCheckRequest& q) {
   return s;
 }
 
-}  // namespace
+// What check repeats of the candidate's identification: read from its JSON,
+// completed by the options (settings) and by the data (data_and_settings).
+struct CandidateSettings {
+  Domain domain = Domain::Discrete;
+  ContinuousMethod method = ContinuousMethod::Bilinear;
+  int r = 0;          ///< 0 until chosen
+  double ws = 0;      ///< ω_s; 0 until the data give the default
+  RecordSettings rec;
+  std::string note;   ///< what was not read from the candidate, "; "-separated
+};
 
-int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
-  const json cj = read_candidate(q.model_path);
-  const StateSpace candidate = model_from_json(cj, q.model_path);
-  if (candidate.order() < 1) throw Error(ErrorKind::Input, q.model_path, "candidate has order 0");
-  const RecordSettings rec = record_settings(cj, q);
-  const Domain domain = candidate.domain;
+CandidateSettings candidate_settings(const json& cj, const FrfCheckRequest& q, const StateSpace& candidate) {
+  CandidateSettings c;
+  c.rec = record_settings(cj, q);
+  c.domain = candidate.domain;
   const std::string jm = candidate_method(cj, q.model_path);
-  if (domain == Domain::Discrete && (jm == "bilinear" || jm == "orthogonal"))
+  if (c.domain == Domain::Discrete && (jm == "bilinear" || jm == "orthogonal"))
     throw Error(ErrorKind::Input, q.model_path, "a discrete-time model with a continuous-time method \"" + jm + "\"");
-  if (domain == Domain::Continuous && jm == "discrete")
+  if (c.domain == Domain::Continuous && jm == "discrete")
     throw Error(ErrorKind::Input, q.model_path, "a continuous-time model with method pintelon2002-alg1 (discrete time)");
-  if (domain == Domain::Discrete && !q.method.empty())
+  if (c.domain == Domain::Discrete && !q.method.empty())
     throw Error(ErrorKind::Input, "--method", "applies to continuous-time candidates only");
-  std::string note;
   const std::string method_s =
-      domain == Domain::Discrete ? "" : setting<std::string>("method", jm, q.method, "", q.model_path, jm, q.method);
-  const ContinuousMethod method = method_s == "orthogonal" ? ContinuousMethod::Orthogonal : ContinuousMethod::Bilinear;
-  if (domain == Domain::Continuous && method_s.empty())
-    note += "method: bilinear (Algorithm 2.1; neither the candidate nor --method names one); ";
+      c.domain == Domain::Discrete ? "" : setting<std::string>("method", jm, q.method, "", q.model_path, jm, q.method);
+  c.method = method_s == "orthogonal" ? ContinuousMethod::Orthogonal : ContinuousMethod::Bilinear;
+  if (c.domain == Domain::Continuous && method_s.empty())
+    c.note += "method: bilinear (Algorithm 2.1; neither the candidate nor --method names one); ";
   const int json_r = int_field(cj, "r", q.model_path);
-  int r = setting<int>("r", json_r, q.r, 0, q.model_path, std::to_string(json_r), std::to_string(q.r));
+  c.r = setting<int>("r", json_r, q.r, 0, q.model_path, std::to_string(json_r), std::to_string(q.r));
   const double json_ws = cj.contains("omega_scale") && cj["omega_scale"].is_number() ? cj["omega_scale"].get<double>() : 0;
-  double ws = setting<double>("omega-scale", json_ws, q.omega_scale, 0, q.model_path, fmt(json_ws, 17),
-                              fmt(q.omega_scale, 17));
-
-  // The data, read and checked by fast/'s readers (one line naming the cause).
-  const bool from_frf = !q.frf_path.empty();
-  const std::string where = from_frf ? q.frf_path : q.data_path;
-  if (from_frf && rec.treatment != RecordTreatment::Plain)
+  c.ws = setting<double>("omega-scale", json_ws, q.omega_scale, 0, q.model_path, fmt(json_ws, 17), fmt(q.omega_scale, 17));
+  if (!q.frf_path.empty() && c.rec.treatment != RecordTreatment::Plain)
     throw Error(ErrorKind::Input, q.model_path, "was identified with --eiv or --improper, which need periodic "
                                                 "records: give --data RECORDS.csv --meta META.json");
+  return c;
+}
+
+// The data as the candidate's identification saw them (fast/'s readers: one
+// line naming the cause; Section 5's treatment of records, the lines that
+// remain after Eq. 34), completing the default ω_s and the V_SUB choice of r.
+FrfData data_and_settings(const FrfCheckRequest& q, const StateSpace& candidate, CandidateSettings& c) {
+  const bool from_frf = !q.frf_path.empty();
+  const std::string where = from_frf ? q.frf_path : q.data_path;
   FrfData data;
   SampleStatistics stats;
   if (from_frf) {
-    data = read_frf_csv(q.frf_path, domain);
+    data = read_frf_csv(q.frf_path, c.domain);
   } else {
     int inputs = 0;
     const Eigen::MatrixXd samples = read_records_csv(q.data_path, inputs);
     const RecordMeta meta = read_meta(q.meta_path);
     require_sample_subspace_periods(meta, q.meta_path);
-    if (domain == Domain::Discrete && std::abs(candidate.sample_time - meta.sample_time) > 1e-5 * meta.sample_time)
+    if (c.domain == Domain::Discrete && std::abs(candidate.sample_time - meta.sample_time) > 1e-5 * meta.sample_time)
       throw Error(ErrorKind::Input, q.model_path + " field \"sample_time\"",
                   fmt(candidate.sample_time, 10) + " differs from the records' " + fmt(meta.sample_time, 10) + " (" +
                       q.meta_path + "): the candidate was identified from other data");
     try {
-      stats = record_statistics(samples, inputs, meta, domain);
+      stats = record_statistics(samples, inputs, meta, c.domain);
     } catch (const Error& e) {
       throw e.within(q.data_path + " with " + q.meta_path);
     }
@@ -459,31 +469,45 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
                 "has " + std::to_string(candidate.inputs()) + " inputs and " + std::to_string(candidate.outputs()) +
                     " outputs; the data have " + std::to_string(data.inputs()) + " and " +
                     std::to_string(data.outputs()));
-  if (domain == Domain::Continuous && ws == 0) ws = std::sqrt(data.omega.minCoeff() * data.omega.maxCoeff());
-
-  if (r == 0 || rec.treatment != RecordTreatment::Plain) {
-    // r as identify-frf chooses it at the candidate's order, and the data after
-    // Section 5's treatment (the frequencies that remain after Eq. 34).
-    FrfOptions o;
-    o.order = candidate.order();
-    o.r = r;
-    o.continuous = method;
-    o.omega_scale = ws;
-    try {
-      if (from_frf) {
-        r = select_order_and_r(data, o).r;
-      } else {
-        FrfRun run = identify_frf_records(stats, o, rec.treatment, rec.eiv_variance, rec.min_input_snr);
-        data = std::move(run.data);
-        if (r == 0) r = run.result.r;
-      }
-    } catch (const Error& e) {
-      throw e.within(where);
+  if (c.domain == Domain::Continuous && c.ws == 0) c.ws = std::sqrt(data.omega.minCoeff() * data.omega.maxCoeff());
+  if (c.r > 0 && c.rec.treatment == RecordTreatment::Plain) return data;
+  FrfOptions o;
+  o.order = candidate.order();
+  o.r = c.r;
+  o.continuous = c.method;
+  o.omega_scale = c.ws;
+  try {
+    if (from_frf) {
+      c.r = select_order_and_r(data, o).r;
+    } else {
+      FrfRun run = identify_frf_records(stats, o, c.rec.treatment, c.rec.eiv_variance, c.rec.min_input_snr);
+      data = std::move(run.data);
+      if (c.r == 0) c.r = run.result.r;
     }
-    if (o.r == 0)
-      note += "r = " + std::to_string(r) +
-              " by fdsid's V_SUB selection (Pintelon 2002 Section 5; the candidate JSON has no r, give --r); ";
+  } catch (const Error& e) {
+    throw e.within(where);
   }
+  if (o.r == 0)
+    c.note += "r = " + std::to_string(c.r) +
+              " by fdsid's V_SUB selection (Pintelon 2002 Section 5; the candidate JSON has no r, give --r); ";
+  return data;
+}
+
+}  // namespace
+
+int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
+  const json cj = read_candidate(q.model_path);
+  const StateSpace candidate = model_from_json(cj, q.model_path);
+  if (candidate.order() < 1) throw Error(ErrorKind::Input, q.model_path, "candidate has order 0");
+  CandidateSettings c = candidate_settings(cj, q, candidate);
+  const FrfData data = data_and_settings(q, candidate, c);
+  const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
+  const Domain domain = c.domain;
+  const ContinuousMethod method = c.method;
+  const int r = c.r;
+  const double ws = c.ws;
+  const RecordSettings& rec = c.rec;
+  const std::string& note = c.note;
 
   FrfHighRequest hq;
   hq.frf_path = q.frf_path;
