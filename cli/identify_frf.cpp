@@ -28,11 +28,14 @@ struct IdentifyFrfCommand {
 
 // --precision high: the reference identifies for a given order and r; the
 // automatic choices (Section 5) are made once, in double precision, and reported.
-int run_high(const IdentifyFrfCommand& c, const FrfData& data, const std::string& where) {
+int run_high(const IdentifyFrfCommand& c, const FrfData& data, const SampleStatistics& stats, const FrfSource& source,
+             const std::string& where) {
   if (!c.plot_path.empty())
     throw Error(ErrorKind::Input, "--plot", "is drawn from the double-precision result; not with --precision high");
-  if (c.eiv || c.improper) throw Error(ErrorKind::Input, "--precision", "high is not available with --eiv or --improper");
   FrfHighRequest q;
+  q.treatment = source.treatment;
+  q.eiv_variance = source.eiv_variance;
+  q.min_input_snr = source.min_input_snr;
   q.frf_path = c.frf_path;
   q.data_path = c.data_path;
   q.meta_path = c.meta_path;
@@ -42,8 +45,15 @@ int run_high(const IdentifyFrfCommand& c, const FrfData& data, const std::string
   std::string note;
   OrderAndR sel{c.options.order, c.options.r};
   if (sel.order == 0 || sel.r == 0) {
+    FrfOptions o = c.options;
+    o.continuous = c.method;  // the selection with the method the reference will use
     try {
-      sel = select_order_and_r(data, c.options);
+      if (source.treatment == RecordTreatment::Plain) {
+        sel = select_order_and_r(data, o);
+      } else {  // the selection on the data of Section 5's treatment
+        const FrfRun run = identify_frf_records(stats, o, source.treatment, source.eiv_variance, source.min_input_snr);
+        sel = {run.result.order, run.result.r};
+      }
     } catch (const Error& e) {
       throw e.within(where);
     }
@@ -100,7 +110,7 @@ int run(const IdentifyFrfCommand& c) {
     source.eiv_variance = c.eiv_variance;
     source.min_input_snr = c.min_input_snr;
   }
-  if (c.precision == Precision::High) return run_high(c, data, where);
+  if (c.precision == Precision::High) return run_high(c, data, stats, source, where);
 
   const std::string method = frf_method_name(c.domain, c.method);
   FrfResult res;
@@ -116,9 +126,7 @@ int run(const IdentifyFrfCommand& c) {
   } catch (const Error& e) {
     throw e.within(where);
   }
-  const bool capped = o.order == 0 &&
-                      std::any_of(res.warnings.begin(), res.warnings.end(),
-                                  [](const std::string& w) { return w.find("top of the searched range") != std::string::npos; });
+  const bool capped = o.order == 0 && res.order_at_search_cap;
   out << "identified order " << res.order
       << (o.order == 0 ? (capped ? " (the top of the searched range; see the warning)" : " (read from the singular values)")
                        : "")

@@ -909,6 +909,39 @@ TEST_F(CliFrf, CheckCatchesTheClassicMistakes) {
   // number per frequency of constant modulus, and both estimates coincide.)
 }
 
+// Review finding 13: a power basis numerically dependent on a narrow band was
+// reported as "C_Y is not positive definite (variances too small)". The
+// message names the band and the ways out.
+TEST_F(CliFrf, ANarrowBandNamesTheBandNotTheVariances) {
+  std::vector<double> omega;
+  for (int k = 0; k < 40; ++k) omega.push_back(0.05 + 0.05 * k / 39.0);  // 1.6 % of [0, pi]
+  const std::string f = write("narrow.csv", frf_csv(pintelon_plant(), omega, 1e-6));
+  const RunResult r = run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--r", "30"});
+  EXPECT_TRUE(IsBadInput(r, {"rad/sample", "% of [0, pi]", "--r", "--domain continuous"}));
+  EXPECT_EQ(r.err.find("variances too small"), std::string::npos) << r.err;
+}
+
+// identify-frf --precision high repeats Section 5's treatments as check does:
+// its model is, digit for digit, the reference model check compares with.
+TEST_F(CliFrf, HighPrecisionTreatsRecordsAsCheckDoes) {
+  simulate(64, 6, 1e-3, "rec");
+  for (const std::string treatment : {"--eiv", "--improper"}) {
+    SCOPED_TRACE(treatment);
+    const std::vector<std::string> common = {"identify-frf", "--data", path("rec.csv"), "--meta",
+                                             path("rec.meta.json"), "--order", "4", "--r", "8", treatment};
+    std::vector<std::string> dbl = common, high = common;
+    dbl.insert(dbl.end(), {"--json", path("double.json")});
+    high.insert(high.end(), {"--precision", "high", "--json", path("high.json")});
+    ASSERT_TRUE(Succeeded(run_fdsid(dbl)));
+    ASSERT_TRUE(Succeeded(run_fdsid(high)));
+    const RunResult r = run_fdsid({"check", "--model", path("double.json"), "--data", path("rec.csv"), "--meta",
+                                   path("rec.meta.json"), "--json", path("check.json")});
+    ASSERT_EQ(r.status, 0) << describe(r);
+    EXPECT_EQ(read_json("high.json")["A"], read_json("check.json")["reference_model"]["A"]);
+    EXPECT_EQ(read_json("high.json")["poles"], read_json("check.json")["reference_model"]["poles"]);
+  }
+}
+
 TEST_F(CliFrf, CheckRefusesWhatItCannotCompare) {
   const std::string d = write("d.csv", noisy_frf_csv(pintelon_plant(), discrete_grid(40), 1e-2));
   ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--frf", d, "--order", "4", "--r", "8", "--json", path("c.json")})));

@@ -99,6 +99,41 @@ TEST(GapStatistic, F2SurvivalIsBoostsFisherF) {
     }
 }
 
+// The null moments behind the relevance rule (issue 17: a mutant d/(d+2) of the
+// F mean passed the quick suite). Boost's F(2, d) mean and variance are an
+// independent statement of the formulas; a Monte Carlo of the gap itself
+// (mean of K variates t = (chi2_2 / 2) / (chi2_d / d), times (M-2)/(M-1), the
+// gap's definition in gap.hpp) checks mean 1 and the standard deviation:
+// R = 20000 replicates, M >= 6 so that F(2, d) has a finite fourth moment
+// (d > 8) and the sample standard deviation its usual error ~ sd / sqrt(2R)
+// (0.5 %, the mean of K = 50 lines being close to Gaussian); 5 % is 10 of those.
+TEST(GapStatistic, NullMomentsOfTheGap) {
+  constexpr int K = 50, R = 20000;
+  for (int M : {4, 6, 10}) {
+    const int d = 2 * M - 2;
+    const boost::math::fisher_f f(2, d);
+    EXPECT_NEAR(gap_null_sd(M, K),
+                std::sqrt(boost::math::variance(f)) / boost::math::mean(f) / std::sqrt(double(K)),
+                1e-12 * gap_null_sd(M, K))
+        << "M = " << M;
+    if (M < 6) continue;
+    std::mt19937_64 rng(M);
+    std::exponential_distribution<double> e(1.0);
+    std::chi_squared_distribution<double> chi(d);
+    double sum = 0, sum2 = 0;
+    for (int rep = 0; rep < R; ++rep) {
+      double t = 0;
+      for (int k = 0; k < K; ++k) t += e(rng) / (chi(rng) / d);
+      const double gap = (M - 2.0) / (M - 1.0) * t / K;
+      sum += gap;
+      sum2 += gap * gap;
+    }
+    const double mean = sum / R, sd = std::sqrt((sum2 - R * mean * mean) / (R - 1));
+    EXPECT_NEAR(mean, 1.0, 5 * gap_null_sd(M, K) / std::sqrt(double(R))) << "M = " << M;
+    EXPECT_NEAR(sd / gap_null_sd(M, K), 1.0, 0.05) << "M = " << M;
+  }
+}
+
 TEST(GapStatistic, RightModelGivesGapOneAndFewFalseAlarms) {
   // H0: the plant itself, white output noise, exact steady state. Per record
   // gap = mean of K = 38 lines of F(2, 14)/μ: sd = sqrt(var F / μ² / K) with

@@ -86,8 +86,8 @@ ModelComparison compare_models(const StateSpace& cand, const StateSpace& ref, in
   c.reference_order = ref.order();
   const Eigen::VectorXcd pc = poles(cand), pr = poles(ref);
   c.pole_distance = hausdorff(pc, pr);
-  if (pc.size()) c.candidate_pole_modulus = pc.cwiseAbs().maxCoeff();
-  if (pr.size()) c.reference_pole_modulus = pr.cwiseAbs().maxCoeff();
+  c.candidate_pole_modulus = spectral_radius(cand);
+  c.reference_pole_modulus = spectral_radius(ref);
 
   double scale = 0;
   for (int k = 0; k < grid; ++k) {
@@ -300,8 +300,9 @@ OracleQuantity compare_frf_poles(const StateSpace& cand, const StateSpace& ref, 
     if (ratio > q.ratio) q = {err, tol(j), ratio, 0.0};
   };
   for (Eigen::Index i = 0; i < pc.size(); ++i) {
-    Eigen::Index j;
-    consider((lambda.array() - pc(i)).abs().minCoeff(&j), j);
+    Eigen::Index j = 0;
+    const double err = (lambda.array() - pc(i)).abs().minCoeff(&j);  // sets j before it is read
+    consider(err, j);
   }
   for (Eigen::Index j = 0; j < n; ++j) consider((pc.array() - lambda(j)).abs().minCoeff(), j);
   return q;

@@ -236,6 +236,21 @@ void step1_check_size(const FrfData& d, int r) {
 // backward error; numerics/rank.hpp), rows = 2 F c.
 // Fails: Error(Numerical) when 𝐔^re is rank deficient.
 // References: Pintelon (2002) Eqs. (9), (11), (18), Assumption 3.
+// Where the data lie, for the messages of step 1 (review finding 13: a basis
+// numerically dependent on a narrow band was reported as "variances too
+// small"): the band and what to do about it.
+std::string band_advice(const FrfData& d, int r) {
+  const double lo = d.omega.minCoeff(), hi = d.omega.maxCoeff();
+  if (d.domain == Domain::Discrete)
+    return "the excited band omega = " + fmt(lo, 3) + " ... " + fmt(hi, 3) + " rad/sample covers " +
+           fmt(100 * (hi - lo) / M_PI, 3) + " % of [0, pi], on which r = " + std::to_string(r) +
+           " powers of z are numerically dependent; use a lower --r, or --domain continuous (rad/s, a basis "
+           "scaled to the band) with the frequencies in rad/s";
+  return "the band omega = " + fmt(lo, 3) + " ... " + fmt(hi, 3) + " rad/s spans a factor " + fmt(hi / lo, 3) +
+         ", on which r = " + std::to_string(r) + " basis functions are numerically dependent; use a lower --r, or "
+         "the other --method";
+}
+
 Eigen::MatrixXd step1ab_qr(const FrfData& d, const Bases& b, int r) {
   const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
   const int nu = r * m, ny = r * p, cols = nu + ny;
@@ -262,7 +277,7 @@ Eigen::MatrixXd step1ab_qr(const FrfData& d, const Bases& b, int r) {
     fail(ErrorKind::Numerical, "step 1b",
          "the input data matrix U^re is rank deficient (min |R11_ii| / max = " + fmt(r11.minCoeff() / r11max, 3) +
              "): the input does not excite r = " + std::to_string(r) +
-             " basis functions (Pintelon 2002 Assumption 3); use fewer r or more excited lines");
+             " basis functions (Pintelon 2002 Assumption 3): " + band_advice(d, r) + ", or excite more lines");
   return R;
 }
 
@@ -313,14 +328,15 @@ Eigen::MatrixXd step1c_noise_covariance(const FrfData& d, const Bases& b, int r)
 // ‖L⁻¹‖; noise_scale = ‖L⁻¹‖₁ ‖R‖_F records it.
 // Fails: Error(Numerical) when C_Y is not positive definite.
 // References: Pintelon (2002) Algorithm 1 step 1c.
-Step1 step1c_whitened_svd(const Eigen::MatrixXd& CY, const Eigen::MatrixXd& R, int r) {
+Step1 step1c_whitened_svd(const Eigen::MatrixXd& CY, const Eigen::MatrixXd& R, int r, const FrfData& d) {
   const Eigen::Index ny = CY.rows();
   const Eigen::MatrixXd R22t = R.bottomRightCorner(ny, ny).transpose();
   Step1 s;
   Eigen::LLT<Eigen::MatrixXd> llt(CY);
   if (llt.info() != Eigen::Success)
-    fail(ErrorKind::Numerical, "step 1c", "C_Y is not positive definite (variances too small for r = " +
-                                              std::to_string(r) + ")");
+    fail(ErrorKind::Numerical, "step 1c",
+         "C_Y = sum of sigma^2 W W^H (Eq. 18) is not positive definite: " + band_advice(d, r) +
+             " (or the variances are zero or tiny: check the G_var column)");
   s.L = llt.matrixL();
   const Eigen::MatrixXd K = s.L.triangularView<Eigen::Lower>().solve(R22t);
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(K, Eigen::ComputeFullU);
@@ -337,7 +353,7 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
   const Eigen::MatrixXd R = step1ab_qr(d, b, r);
   const int nu = r * d.inputs();
   const double r11_cond = triangular_condition(R.topLeftCorner(nu, nu));
-  Step1 s = step1c_whitened_svd(step1c_noise_covariance(d, b, r), R, r);
+  Step1 s = step1c_whitened_svd(step1c_noise_covariance(d, b, r), R, r, d);
   s.r11_condition = r11_cond;
   return s;
 }
@@ -774,7 +790,10 @@ FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
     best.order_r = automatic.order_r;
   }
   best.noise_edge = automatic.edge;
-  if (!automatic.capped.empty()) best.warnings.push_back(automatic.capped);
+  if (!automatic.capped.empty()) {
+    best.warnings.push_back(automatic.capped);
+    best.order_at_search_cap = true;
+  }
   return best;
 }
 
@@ -897,16 +916,21 @@ void require_input_power(const Eigen::MatrixXd& samples, int inputs, const Recor
              "(frequency k / (P Ts))?");
 }
 
+int repeated_line(const std::vector<int>& lines) {
+  std::set<int> seen;
+  for (int k : lines)
+    if (!seen.insert(k).second) return k;
+  return -1;
+}
+
 SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta,
                                    Domain domain) {
   if (meta.periods < 2)
     fail(ErrorKind::Input, "meta field \"periods\"",
          "M = " + std::to_string(meta.periods) + ": the sample variance needs at least 2 periods");
   if (meta.excited_lines.empty()) fail(ErrorKind::Input, "meta field \"excited_lines\"", "no excited lines");
-  std::set<int> seen;
-  for (int k : meta.excited_lines)
-    if (!seen.insert(k).second)
-      fail(ErrorKind::Input, "meta field \"excited_lines\"", "line " + std::to_string(k) + " is listed twice");
+  if (const int k = repeated_line(meta.excited_lines); k >= 0)
+    fail(ErrorKind::Input, "meta field \"excited_lines\"", "line " + std::to_string(k) + " is listed twice");
   if (!(meta.sample_time > 0) || !std::isfinite(meta.sample_time))
     fail(ErrorKind::Input, "meta field \"sample_time\"", "must be positive, got " + fmt(meta.sample_time, 6));
   if (inputs < 1 || inputs >= samples.cols())

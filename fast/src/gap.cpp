@@ -89,6 +89,11 @@ double f2_survival(double t, int d2) {
   return std::exp(-0.5 * d2 * std::log1p(2.0 * t / d2));
 }
 
+double gap_null_sd(int periods, int lines) {
+  const double d = 2.0 * periods - 2, mean_f = d / (d - 2), var_f = d * d * d / ((d - 2) * (d - 2) * (d - 4));
+  return std::sqrt(var_f) / mean_f / std::sqrt(static_cast<double>(lines));
+}
+
 namespace {
 
 // The linear effects: the first five of kAllEffects.
@@ -1098,10 +1103,8 @@ class LinearSelection {
     const LineStats st = line_stats(s, cur, s.exc);
     Vc_ = st.pooled_cost;
     gc_ = gap_of(st);
-    // Relevance floor: 3 standard deviations of the gap under H0,
-    // sd = √(var F(2, d)) / mean F(2, d) / √K with d = 2M − 2.
-    const double d = 2.0 * st.M - 2, mean_f = d / (d - 2), var_f = d * d * d / ((d - 2) * (d - 2) * (d - 4));
-    floor_ = 3 * std::sqrt(var_f) / mean_f / std::sqrt(static_cast<double>(s.exc.size()));
+    // Relevance floor: 3 standard deviations of the gap under H0.
+    floor_ = 3 * gap_null_sd(st.M, static_cast<int>(s.exc.size()));
   }
 
   // The accepted sets, in order: none; the single; or the single and then the

@@ -66,6 +66,11 @@ Eigen::VectorXcd poles(const StateSpace& m) {
   return sorted_by_modulus(std::move(v));
 }
 
+double spectral_radius(const StateSpace& m) {
+  const Eigen::VectorXcd p = poles(m);
+  return p.size() ? p.cwiseAbs().maxCoeff() : 0.0;
+}
+
 Eigen::VectorXcd zeros(const StateSpace& m) {
   const Eigen::Index n = m.A.rows(), k = m.B.cols();
   if (n == 0 || k != m.C.rows()) return {};

@@ -21,26 +21,21 @@ Eigen::MatrixXd simulate_periodic_record(const StateSpace& model, const RecordOp
   std::vector<int> lines = o.lines;
   if (lines.empty())
     for (int k = 1; k < P / 4; k += 2) lines.push_back(k);
-  std::vector<bool> listed(static_cast<size_t>(P), false);
-  for (int k : lines) {
+  for (int k : lines)
     if (k < 1 || k >= P / 2)
       throw Error(ErrorKind::Input, "record", "excited line " + std::to_string(k) + " is outside 1 ... P/2 - 1");
-    // identify-frf refuses a meta that lists a line twice; so does the simulation.
-    if (listed[static_cast<size_t>(k)])
-      throw Error(ErrorKind::Input, "record", "excited line " + std::to_string(k) + " is listed twice");
-    listed[static_cast<size_t>(k)] = true;
-  }
+  // identify-frf refuses a meta that lists a line twice; so does the simulation.
+  if (const int k = repeated_line(lines); k >= 0)
+    throw Error(ErrorKind::Input, "record", "excited line " + std::to_string(k) + " is listed twice");
   // The records are the periodic steady state, computed line by line as
   // G(e^{jw_k}) U_k. An unstable model has none: the frequency-domain formula
   // would still give a periodic signal, the non-causal one, which no
   // experiment can produce.
-  if (model.order() > 0) {
-    const double rho = poles(model).cwiseAbs().maxCoeff();
-    if (!(rho < 1.0))
-      throw Error(ErrorKind::Input, "model",
-                  "has a pole of modulus " + fmt(rho, 6) +
-                      " (not inside the unit circle): an unstable model has no periodic steady state to record");
-  }
+  const double rho = spectral_radius(model);
+  if (!(rho < 1.0))
+    throw Error(ErrorKind::Input, "model",
+                "has a pole of modulus " + fmt(rho, 6) +
+                    " (not inside the unit circle): an unstable model has no periodic steady state to record");
   std::mt19937_64 gen(o.seed);
   std::uniform_real_distribution<double> phase(0.0, 2 * M_PI);
   const int bins = P / 2 + 1;

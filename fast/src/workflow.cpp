@@ -63,13 +63,11 @@ void require_spectrum_model(const StateSpace& model, const std::string& where) {
   if (model.domain != Domain::Discrete)
     throw Error(ErrorKind::Input, where,
                 "is a continuous-time model: a power spectrum on the grid pi(k-1)/M needs a discrete-time one");
-  if (model.order() > 0) {
-    const double rho = poles(model).cwiseAbs().maxCoeff();
-    if (!(rho < 1.0))
-      throw Error(ErrorKind::Input, where,
-                  "A has a pole of modulus " + std::to_string(rho) +
-                      " (not inside the unit circle): the power spectrum of an unstable model is not defined");
-  }
+  const double rho = spectral_radius(model);
+  if (!(rho < 1.0))
+    throw Error(ErrorKind::Input, where,
+                "A has a pole of modulus " + std::to_string(rho) +
+                    " (not inside the unit circle): the power spectrum of an unstable model is not defined");
   if (model.inputs() != model.outputs())
     throw Error(ErrorKind::Input, where, "a power spectrum needs a square model (as many inputs as outputs)");
 }

@@ -76,6 +76,8 @@ struct FrfResult {
   /// V_SUB for every r tried (empty when r was given).
   std::vector<std::pair<int, double>> r_scan;
   Eigen::VectorXcd poles;
+  /// The automatic order stopped at the top of its search range (a warning says so).
+  bool order_at_search_cap = false;
   /// ω_s of Algorithm 2 that was used (continuous time; 0 in discrete time).
   double omega_scale = 0;
   /// κ = max((max(σ_1, ‖L⁻¹‖‖R‖)/σ_n of step 1c) · cond(Ô_r[1:r−1]) of step 2 ·
@@ -197,6 +199,10 @@ SampleStatistics sample_statistics(Domain domain, const Eigen::VectorXd& omega,
 /// 0-based or shifted list of an odd multisine fails so; the right list never
 /// does (each of its lines is quiet with probability ≤ 1 %). M < 2: no test.
 void require_input_power(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta);
+
+/// The first excited line listed twice in `lines`, or -1 (record_statistics
+/// and simulate-records refuse such a list).
+int repeated_line(const std::vector<int>& lines);
 
 /// Periodic input/output record (inputs then outputs as columns) → sample
 /// statistics at the excited lines. ω_k = 2πk/P (discrete, rad/sample) or

@@ -181,4 +181,12 @@ nlohmann::json gap_report_to_json(const GapReport& report);
 /// Survival function of F(2, d2): P(F > t) = (1 + 2t/d2)^{−d2/2}.
 double f2_survival(double t, int d2);
 
+/// Standard deviation of the gap under a right model, over `lines` excited
+/// lines and M = `periods` ≥ 5 periods: the gap is the mean of K independent
+/// F(2, d) variates (d = 2M − 2) divided by their mean d/(d − 2), so its
+/// standard deviation is √(var F(2, d)) / mean F(2, d) / √K with
+/// var F(2, d) = d³ / ((d − 2)² (d − 4)). The relevance rule of the effect
+/// selection is 3 of these. M = 4 (d = 6 > 4) has a finite variance too.
+double gap_null_sd(int periods, int lines);
+
 }  // namespace fdsid

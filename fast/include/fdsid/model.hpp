@@ -40,6 +40,10 @@ Eigen::MatrixXcd power_spectrum(const StateSpace& model, cplx z);
 /// Eigenvalues of A (the poles), sorted by modulus then argument.
 Eigen::VectorXcd poles(const StateSpace& model);
 
+/// The largest pole modulus, max |λ_i(A)| (0 for order 0); a discrete-time
+/// model is stable when it is < 1.
+double spectral_radius(const StateSpace& model);
+
 /// Transmission zeros of a square model: the finite generalised eigenvalues of
 /// the Rosenbrock pencil ([A B; C D], [I 0; 0 0]) by real QZ (Eigen's
 /// GeneralizedEigenSolver); infinite ones are dropped (an infinite eigenvalue
