@@ -556,7 +556,9 @@ TEST_F(CliFrf, GapFindsADelayAndPrintsTheVerdict) {
   EXPECT_NE(h.out.find("verdict: delay"), std::string::npos) << h.out;
   // Review finding 21: p-values that underflowed printed as 0.000e+00, flags
   // and orders as 2.0000e+00.
-  if (j["tests"]["p_gap"].get<double>() < 1e-300) EXPECT_NE(h.out.find("p(gap) < 1e-300"), std::string::npos) << h.out;
+  if (j["tests"]["p_gap"].get<double>() < 1e-300) {
+    EXPECT_NE(h.out.find("p(gap) < 1e-300"), std::string::npos) << h.out;
+  }
   EXPECT_EQ(h.out.find("0.000e+00"), std::string::npos) << h.out;
   EXPECT_EQ(h.out.find(" 0.00e+00"), std::string::npos) << h.out;
   EXPECT_EQ(h.out.find("=1.0000e+00"), std::string::npos) << h.out;
