@@ -35,6 +35,8 @@ void register_reproduce(CLI::App& app, Action& chosen);          // reproduce.cp
 void register_identify_spectrum(CLI::App& app, Action& chosen);  // identify_spectrum.cpp
 void register_identify_frf(CLI::App& app, Action& chosen);       // identify_frf.cpp
 void register_check(CLI::App& app, Action& chosen);              // check.cpp
+void register_certify(CLI::App& app, Action& chosen);            // certify.cpp
+void register_conformance(CLI::App& app, Action& chosen);        // conformance.cpp
 void register_sample_spectrum(CLI::App& app, Action& chosen);    // sample_spectrum.cpp
 void register_simulate_records(CLI::App& app, Action& chosen);   // simulate.cpp
 void register_gap(CLI::App& app, Action& chosen);                // gap.cpp (gap, gap-validate)

@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
   register_simulate_records(app, chosen);
   register_identify_spectrum(app, chosen);
   register_check(app, chosen);
+  register_conformance(app, chosen);
+  register_certify(app, chosen);
   register_sample_spectrum(app, chosen);
   register_gap(app, chosen);
 

@@ -1,4 +1,5 @@
 #include "high_precision.hpp"
+#include "reference_runs.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -27,24 +28,34 @@ using nlohmann::json;
 
 double to_double(const json& decimal) { return std::stod(decimal.get<std::string>()); }
 
-// The 50-digit value of a double, exactly (17 significant digits identify it).
+}  // namespace
+
 reference::Real exact(double x) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.17g", x);
   return reference::parse_decimal(buf);
 }
 
-// Runs the reference, turning its errors into the library's typed errors
-// (input problems and failed steps both exit 2 with one line).
-// The perturbations of check's tolerance for an unperturbed result at p, r, M.
-using PerturbationsFor =
-    std::function<std::vector<reference::BackwardPerturbation>(const reference::Result&, int, int, int)>;
+std::string precision_label() {
+  const std::string d = std::to_string(reference::kDigits);
+  return "high (" + d + "-digit binary floating point, Boost.Multiprecision cpp_bin_float<" + d + ">)";
+}
 
-// With `perturbations_for`: also the perturbed reruns of check's tolerance
-// into `perturbed` (steps 1-2 shared; a rerun whose step fails is left out).
+PerturbationsFor spectrum_perturbations(bool vo) {
+  return [vo](const reference::Result& base, int pp, int rr, int MM) {
+    std::vector<reference::BackwardPerturbation> bp;
+    const Eigen::VectorXcd z = zeros(model_from_json(reference::result_to_json(base, vo, 40), "reference model"));
+    const OracleBackwardErrors e =
+        oracle_backward_errors(pp, rr, base.model.C.rows(), MM, base.order, z.size() ? z.cwiseAbs().maxCoeff() : 0.0);
+    for (unsigned seed = 1; seed <= 3; ++seed)
+      bp.push_back({exact(e.data_matrix), exact(e.least_squares), exact(e.riccati), seed, nullptr});
+    return bp;
+  };
+}
+
 reference::Result run_reference(const std::string& data_path, int order, int& p, int& r, bool vo, Extension ext,
-                                int& m, int& M, const PerturbationsFor* perturbations_for = nullptr,
-                                std::vector<reference::Result>* perturbed = nullptr) {
+                                int& m, int& M, const PerturbationsFor* perturbations_for,
+                                std::vector<reference::Result>* perturbed) {
   // The file is checked by fast/'s reader first, so that a bad one gets the
   // same one-line message (file and line once, the cause named: header, grid,
   // Hermitian samples, an FRF file given as a spectrum) as without
@@ -71,6 +82,8 @@ reference::Result run_reference(const std::string& data_path, int order, int& p,
     throw Error(ErrorKind::Input, data_path, e.what());
   }
 }
+
+namespace {
 
 // The candidate's JSON (a model file, or an identified model of the contracts).
 json read_candidate(const std::string& model_path) {
@@ -100,7 +113,7 @@ int identify_spectrum_high(const std::string& json_path, const std::string& data
   json j = reference::result_to_json(res, vo, 40);
   j["extension"] = to_string(ext);
   j["data"] = data_path;
-  j["precision"] = "high (50-digit binary floating point, Boost.Multiprecision cpp_bin_float<50>)";
+  j["precision"] = precision_label();
   if (json_path != "-") {
     std::cout << "identified order " << res.order << " in high precision by " << (vo ? "vo1997" : "akcay2011")
               << " from M = " << M << ", m = " << m << ", p = " << res.p << ", r = " << res.r << "\npoles:";
@@ -132,15 +145,9 @@ int check(const std::string& json_path, const std::string& model_path, const std
   std::string note;
   // The reruns of the tolerance (workflow.hpp, set_oracle_tolerances): the
   // backward errors of a correct double implementation, three random directions.
+  const PerturbationsFor rule = spectrum_perturbations(vo);
   const PerturbationsFor perturbations_for = [&](const reference::Result& base, int pp, int rr, int MM) {
-    std::vector<reference::BackwardPerturbation> bp;
-    if (tolerance > 0) return bp;
-    const Eigen::VectorXcd z = zeros(model_from_json(reference::result_to_json(base, vo, 40), "reference model"));
-    const OracleBackwardErrors e =
-        oracle_backward_errors(pp, rr, base.model.C.rows(), MM, base.order, z.size() ? z.cwiseAbs().maxCoeff() : 0.0);
-    for (unsigned seed = 1; seed <= 3; ++seed)
-      bp.push_back({exact(e.data_matrix), exact(e.least_squares), exact(e.riccati), seed, nullptr});
-    return bp;
+    return tolerance > 0 ? std::vector<reference::BackwardPerturbation>() : rule(base, pp, rr, MM);
   };
   std::vector<reference::Result> moved;
   reference::Result res;
@@ -201,11 +208,9 @@ int sample_spectrum_high(const std::string& model_path, int M, const std::string
   return 0;
 }
 
-namespace {
 
 
-// Periodic records read by fast/'s reader, turned into the reference's sample
-// means and variances over the periods (Pintelon 2002 Section 4.1) in 50 digits.
+
 reference::SampleStatistics records_high(const FrfHighRequest& q, const std::string& domain,
                                          reference::Real& sample_time) {
   int inputs = 0;
@@ -230,32 +235,27 @@ reference::SampleStatistics records_high(const FrfHighRequest& q, const std::str
   return reference::sample_statistics(domain, omega, U_l, Y_l);
 }
 
-// The identified model's JSON, every number a 40-digit decimal string.
 json frf_high_json(const reference::FrfResult& res, const FrfHighRequest& q, const std::string& where,
-                   const std::string& note) {
-  json j = reference::model_to_json(res.model, 40);
+                   const std::string& note, int digits) {
+  json j = reference::model_to_json(res.model, digits);
   j["order"] = res.order;
   j["r"] = res.r;
   j["method"] = q.continuous ? std::string("pintelon2002-alg2-") + (q.orthogonal ? "orthogonal" : "bilinear")
                              : std::string("pintelon2002-alg1");
   json sv = json::array();
-  for (const auto& s : res.singular_values) sv.push_back(reference::to_decimal(s, 40));
+  for (const auto& s : res.singular_values) sv.push_back(reference::to_decimal(s, digits));
   j["singular_values"] = sv;
   json poles = json::array();
-  for (const auto& z : res.poles) poles.push_back({reference::to_decimal(z.real(), 40), reference::to_decimal(z.imag(), 40)});
+  for (const auto& z : res.poles) poles.push_back({reference::to_decimal(z.real(), digits), reference::to_decimal(z.imag(), digits)});
   j["poles"] = poles;
-  j["v_sub"] = reference::to_decimal(res.v_sub, 40);
+  j["v_sub"] = reference::to_decimal(res.v_sub, digits);
   j["data"] = where;
-  j["precision"] = "high (50-digit binary floating point, Boost.Multiprecision cpp_bin_float<50>)";
+  j["precision"] = precision_label();
   if (!note.empty()) j["note"] = note;
   return j;
 }
 
-// The reference's identification for the request (its errors turned into the
-// library's typed errors, as run_reference does for spectra).
-// `perturbation` > 0: reference::FrfOptions::backward_perturbation (check's tolerance).
-reference::FrfResult reference_frf(const FrfHighRequest& q, const reference::Real& perturbation = 0,
-                                   unsigned seed = 1) {
+reference::FrfResult reference_frf(const FrfHighRequest& q, const reference::Real& perturbation, unsigned seed) {
   const std::string domain = q.continuous ? "continuous" : "discrete";
   const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
   reference::FrfResult res;
@@ -302,7 +302,19 @@ reference::FrfResult reference_frf(const FrfHighRequest& q, const reference::Rea
   return res;
 }
 
-}  // namespace
+
+
+std::vector<StateSpace> frf_perturbed_models(const FrfHighRequest& q, double backward_error, double sample_time) {
+  const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
+  std::vector<StateSpace> models;
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    StateSpace p = model_from_json(frf_high_json(reference_frf(q, exact(backward_error), seed), q, where, ""),
+                                   "perturbed reference model");
+    if (!q.continuous) p.sample_time = sample_time;
+    models.push_back(std::move(p));
+  }
+  return models;
+}
 
 int identify_frf_high(const std::string& json_path, const FrfHighRequest& q, const std::string& note) {
   const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
@@ -502,25 +514,19 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
   CandidateSettings c = candidate_settings(cj, q, candidate);
   const FrfData data = data_and_settings(q, candidate, c);
   const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
-  const Domain domain = c.domain;
-  const ContinuousMethod method = c.method;
-  const int r = c.r;
-  const double ws = c.ws;
-  const RecordSettings& rec = c.rec;
-  const std::string& note = c.note;
 
   FrfHighRequest hq;
   hq.frf_path = q.frf_path;
   hq.data_path = q.data_path;
   hq.meta_path = q.meta_path;
-  hq.continuous = domain == Domain::Continuous;
-  hq.orthogonal = method == ContinuousMethod::Orthogonal;
-  hq.omega_scale = ws;
+  hq.continuous = c.domain == Domain::Continuous;
+  hq.orthogonal = c.method == ContinuousMethod::Orthogonal;
+  hq.omega_scale = c.ws;
   hq.order = candidate.order();
-  hq.r = r;
-  hq.treatment = rec.treatment;
-  hq.eiv_variance = rec.eiv_variance;
-  hq.min_input_snr = rec.min_input_snr;
+  hq.r = c.r;
+  hq.treatment = c.rec.treatment;
+  hq.eiv_variance = c.rec.eiv_variance;
+  hq.min_input_snr = c.rec.min_input_snr;
   const reference::FrfResult res = reference_frf(hq);
 
   FrfOracleCheck k;
@@ -528,30 +534,24 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
   k.data_path = where;
   k.meta_path = q.meta_path;
   k.order = res.order;
-  k.r = r;
-  k.domain = domain;
-  k.method = method;
-  k.omega_scale = ws;
-  k.method_name = frf_method_name(domain, method);
-  if (!note.empty()) k.settings_note = note.substr(0, note.size() - 2);
+  k.r = c.r;
+  k.domain = c.domain;
+  k.method = c.method;
+  k.omega_scale = c.ws;
+  k.method_name = frf_method_name(c.domain, c.method);
+  if (!c.note.empty()) k.settings_note = c.note.substr(0, c.note.size() - 2);
   k.reference_model = frf_high_json(res, hq, where, "");
   StateSpace ref = model_from_json(k.reference_model, "reference model");  // decimal strings, correctly rounded
-  if (domain == Domain::Discrete) ref.sample_time = candidate.sample_time;
+  if (c.domain == Domain::Discrete) ref.sample_time = candidate.sample_time;
   // The tolerance (compare.hpp, FrfTolerance): the reference again, three
-  // times, with Z and C_Y moved by the backward error sqrt(rows cols) u of a
-  // correct double implementation in independent random directions.
-  const int rows = 2 * data.frequencies() * data.columns(), cols = r * (data.inputs() + data.outputs());
-  k.backward_perturbation = std::sqrt(double(rows) * cols) * 0x1p-53;
-  const reference::Real size = sqrt(reference::Real(rows) * cols) * ldexp(reference::Real(1), -53);
-  for (unsigned seed = 1; q.tolerance <= 0 && seed <= 3; ++seed)
-    k.tolerance.perturbed.push_back(
-        model_from_json(frf_high_json(reference_frf(hq, size, seed), hq, where, ""), "perturbed reference model"));
-  for (StateSpace& p : k.tolerance.perturbed)
-    if (domain == Domain::Discrete) p.sample_time = candidate.sample_time;
+  // times, with Z and C_Y moved by the backward error of a correct double
+  // implementation in independent random directions.
+  k.backward_perturbation = frf_backward_error(data, c.r);
+  if (q.tolerance <= 0) k.tolerance.perturbed = frf_perturbed_models(hq, k.backward_perturbation, candidate.sample_time);
   k.tolerance.given = q.tolerance;
-  k.tolerance.method = method;
-  k.tolerance.omega_scale = ws;
-  k.comparison = compare_frf_models(candidate, ref, data.omega, dense_frequency_grid(domain, data.omega), k.tolerance);
+  k.tolerance.method = c.method;
+  k.tolerance.omega_scale = c.ws;
+  k.comparison = compare_frf_models(candidate, ref, data.omega, dense_frequency_grid(c.domain, data.omega), k.tolerance);
   if (json_path != "-") std::cout << k.summary();
   if (!json_path.empty()) write_text_file(json_path, to_json(k).dump(2) + "\n");
   return k.agree() ? 0 : 1;

@@ -40,3 +40,11 @@ target_compile_definitions(cli_plot_test PRIVATE
   FDSID_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 add_dependencies(cli_plot_test fdsid)
 fdsid_discover_tests(cli_plot_test LABELS cli unit quick WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
+
+# fdsid conformance over fixtures/certified: fdsid as the candidate passes every
+# case; wrong and broken candidates fail theirs (exit 1), bad input exits 2.
+add_executable(cli_conformance_test ${CMAKE_CURRENT_LIST_DIR}/cli_conformance_test.cpp)
+target_link_libraries(cli_conformance_test PRIVATE GTest::gtest_main nlohmann_json::nlohmann_json)
+target_compile_definitions(cli_conformance_test PRIVATE FDSID_EXE="$<TARGET_FILE:fdsid>" FDSID_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+add_dependencies(cli_conformance_test fdsid)
+fdsid_discover_tests(cli_conformance_test LABELS cli unit quick WORKING_DIRECTORY ${PROJECT_BINARY_DIR})

@@ -98,6 +98,11 @@ std::string FrfOracleCheck::summary() const {
   return out;
 }
 
+double frf_backward_error(const FrfData& data, int r) {
+  const double rows = 2.0 * data.frequencies() * data.columns(), cols = double(r) * (data.inputs() + data.outputs());
+  return std::sqrt(rows * cols) * 0x1p-53;
+}
+
 OracleBackwardErrors oracle_backward_errors(int p, int r, int m, int M, int n, double rho_z) {
   constexpr double u = std::numeric_limits<double>::epsilon() / 2;
   OracleBackwardErrors e;

@@ -230,4 +230,10 @@ struct OracleBackwardErrors {
 };
 OracleBackwardErrors oracle_backward_errors(int p, int r, int m, int M, int n, double rho_z);
 
+/// The relative backward error FrfTolerance (compare.hpp) assumes of a correct
+/// double implementation of Pintelon (2002) on `data` at r: √(rows · cols) u
+/// with rows × cols = 2Fc × r(m+p), the shape of Zᵀ (the probabilistic
+/// size of Householder QR's column-wise backward error, Higham & Mary 2019).
+double frf_backward_error(const FrfData& data, int r);
+
 }  // namespace fdsid

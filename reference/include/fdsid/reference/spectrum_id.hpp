@@ -40,7 +40,12 @@
 
 namespace fdsid::reference {
 
-using Real = boost::multiprecision::number<boost::multiprecision::cpp_bin_float<50>,
+#ifndef FDSID_REFERENCE_DIGITS
+#define FDSID_REFERENCE_DIGITS 50  // CMake's FDSID_REFERENCE_DIGITS; 100 only for scripts/certify.sh
+#endif
+/// Decimal digits of Real: 50 (100 in the second build of scripts/certify.sh).
+inline constexpr int kDigits = FDSID_REFERENCE_DIGITS;
+using Real = boost::multiprecision::number<boost::multiprecision::cpp_bin_float<FDSID_REFERENCE_DIGITS>,
                                            boost::multiprecision::et_off>;
 using Complex = std::complex<Real>;
 using MatrixR = Eigen::Matrix<Real, Eigen::Dynamic, Eigen::Dynamic>;
