@@ -59,6 +59,23 @@ std::vector<Complex> transmission_zeros(const reference::Model& model) {
   return reference::eigenvalues(Az);
 }
 
+// The system a noise-free spectrum case was sampled from, read from its
+// decimal strings in this build's precision: it must be the minimum-phase
+// factor (poles and zeros strictly inside the unit circle, D nonsingular), so
+// that its normalised G is the exact factor of the sampled spectrum.
+reference::Model minimum_phase_system(const std::string& path) {
+  const reference::Model g = reference::read_model(path);
+  if (g.D.rows() != g.D.cols() || g.D.fullPivLu().rank() < g.D.rows())
+    throw Error(ErrorKind::Input, path, "D must be square and nonsingular (a spectral factor)");
+  for (const Complex& z : reference::eigenvalues(g.A))
+    if (!(abs(z) < 1)) throw Error(ErrorKind::Input, path, "a pole of modulus " + reference::to_decimal(abs(z), 6) + " is not inside the unit circle");
+  for (const Complex& z : transmission_zeros(g))
+    if (!(abs(z) < 1))
+      throw Error(ErrorKind::Input, path, "a zero of modulus " + reference::to_decimal(abs(z), 6) + " is not inside the unit circle: "
+                                          "not the minimum-phase factor");
+  return g;
+}
+
 // The fast/ data of an FRF or records case after Section 5's treatment: its
 // frequencies are the grid of the certified G, its size the backward error.
 FrfData case_data(const CaseSpec& s, const std::string& suite, double& sample_time) {
@@ -98,7 +115,9 @@ CaseResult compute_case(const CaseSpec& s, const std::string& suite, bool with_p
       out.perturbed.push_back(model_from_json(reference::result_to_json(x, vo, 40), "perturbed reference model"));
     out.quantities.push_back(points("poles", res.poles));
     out.quantities.push_back(points("zeros", transmission_zeros(res.model)));
-    RealQuantity S{"S", {}, m, m, {}}, G{"factor", {}, m, m, {}};
+    RealQuantity S{"S", {}, m, m, {}}, G{"factor", {}, m, m, {}}, X{"exact_factor", {}, m, m, {}};
+    reference::Model system;
+    if (!s.system.empty()) system = minimum_phase_system(suite + "/" + s.system);
     for (int k = 0; k <= M; ++k) {
       const double w = M_PI * k / M;  // the grid point as a double reads it
       const Real wr = exact(w);
@@ -106,9 +125,14 @@ CaseResult compute_case(const CaseSpec& s, const std::string& suite, bool with_p
       G.omega.push_back(w);
       S.values.push_back(reference::spectrum_of(res.model, Complex(cos(wr), sin(wr))));
       G.values.push_back(factor_at(res.model, wr));
+      if (!s.system.empty()) {
+        X.omega.push_back(w);
+        X.values.push_back(factor_at(system, wr));
+      }
     }
     out.quantities.push_back(S);
     out.quantities.push_back(G);
+    if (!s.system.empty()) out.quantities.push_back(X);
     return out;
   }
   FrfHighRequest q;

@@ -21,10 +21,10 @@ suite=fixtures/certified
 if [ "${2:-}" = "--data" ]; then
   d=$suite/data s=$suite/systems
   # Akcay (2011) spectra: noise-free samples of the systems, and Section 4 noise.
-  "$fdsid" sample-spectrum --model fixtures/systems/akcay2011.json --M 64 --out $d/akcay2011_M64.csv
-  "$fdsid" sample-spectrum --model fixtures/systems/akcay2011.json --M 16 --out $d/akcay2011_M16.csv
-  "$fdsid" sample-spectrum --model fixtures/systems/mimo2x2_example.json --M 32 --out $d/mimo2x2_M32.csv
-  "$fdsid" sample-spectrum --model fixtures/systems/akcay2011.json --M 256 --epsilon 0.003 --seed 11 --out $d/akcay2011_M256_eps0.003.csv
+  "$fdsid" sample-spectrum --model $s/akcay2011.json --M 64 --out $d/akcay2011_M64.csv
+  "$fdsid" sample-spectrum --model $s/akcay2011.json --M 16 --out $d/akcay2011_M16.csv
+  "$fdsid" sample-spectrum --model $s/mimo2x2_example.json --M 32 --out $d/mimo2x2_M32.csv
+  "$fdsid" sample-spectrum --model $s/akcay2011.json --M 256 --epsilon 0.003 --seed 11 --out $d/akcay2011_M256_eps0.003.csv
   "$fdsid" sample-spectrum --model $s/radius099.json --M 256 --out $d/radius099_M256.csv
   "$fdsid" sample-spectrum --model $s/radius09999.json --M 2048 --out $d/radius09999_M2048.csv
   "$fdsid" sample-spectrum --model $s/clustered.json --M 512 --out $d/clustered_M512.csv
@@ -54,9 +54,9 @@ PY
 fi
 
 second=build-certify100
-cmake -S . -B $second -G Ninja -DCMAKE_BUILD_TYPE=Release -DFDSID_BUILD_TESTS=OFF -DFDSID_BUILD_BENCH=OFF \
+cmake -S . -B $second -DCMAKE_BUILD_TYPE=Release -DFDSID_BUILD_TESTS=OFF -DFDSID_BUILD_BENCH=OFF \
   -DFDSID_REFERENCE_DIGITS=100 > /dev/null
-cmake --build $second --target fdsid
+cmake --build $second -j2 --target fdsid
 raw=$(mktemp -d)
 trap 'rm -rf "$raw"' EXIT
 echo "== 100 digits"

@@ -76,3 +76,15 @@ r99 200 2
 fixtures/systems/mimo2x2_example.json 64 3
 data/akcay2011_M1000_eps1e-3.csv file 4
 CASES
+
+# The certified suite (fixtures/certified): fdsid as the conformance candidate;
+# the tolerances are the stored ones (the suite's perturbed_models).
+printf '\n%-40s %-8s %s\n' "certified case" "tier" "tightness per compared quantity"
+"$fdsid" conformance --suite "$root/fixtures/certified" --candidate "$fdsid {fdsid_args} --json {out}" \
+  --json "$tmp/conformance.json" > /dev/null || true
+python3 -c "
+import json
+for c in json.load(open('$tmp/conformance.json'))['cases']:
+    q = c.get('comparison', {}).get('quantities', [])
+    t = ['%s %.3g' % (x['quantity'], x['tolerance'] / x['distance']) if x['distance'] > 0 else x['quantity'] + ' inf' for x in q]
+    print('%-40s %-8s %s%s' % (c['case'], c['tier'], '' if c['pass'] else 'FAIL ', ', '.join(t)))"

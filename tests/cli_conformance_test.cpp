@@ -146,13 +146,27 @@ TEST_F(Conformance, TheTrueSystemPassesANoiseFreeCaseAndFailsAnotherSystemsCase)
   // Noise-free samples of the Akçay (2011) system identify that system
   // exactly (Theorem 1), so its own model file is a correct answer; given for
   // the Pintelon (2002) FRF of another plant's data it is not.
-  const std::string model = std::string(FDSID_SOURCE_DIR) + "/fixtures/systems/akcay2011.json";
+  const std::string model = kSuite + "/systems/akcay2011.json";
   const RunResult r = run_fdsid({"conformance", "--suite", kSuite, "--case", "akcay2011_M64", "--case",
                                  "frf_continuous4_F50_bilinear", "--candidate", "cp " + model + " {out}", "--json",
                                  path("report.json")});
   ASSERT_EQ(r.status, 1) << describe(r);
   const json report = read_json("report.json");
   EXPECT_TRUE(entry(report, "akcay2011_M64")["pass"].get<bool>()) << entry(report, "akcay2011_M64");
+  // The certified exact factor is this system's normalised factor: the
+  // system read in double agrees with it to the rounding of its parameters,
+  // relative error <= 10 n u / (1 - rho) = 10 * 4 * 1.1e-16 / (1 - 0.954) =
+  // 9.6e-14 (rho the largest pole modulus; the resolvent's sensitivity), an
+  // LRE >= 13.0; 12 leaves a factor 10. A factor not normalised by D's polar
+  // factor, or not minimum phase, scores near 0.
+  bool exact = false;
+  for (const auto& q : entry(report, "akcay2011_M64")["lre"])
+    if (q["name"] == "exact_factor") {
+      exact = true;
+      EXPECT_GE(q["lre"].get<double>(), 12.0) << q;
+      EXPECT_EQ(q["certified_digits"], 40);
+    }
+  EXPECT_TRUE(exact) << "the noise-free spectrum case certifies no exact factor";
   EXPECT_FALSE(entry(report, "frf_continuous4_F50_bilinear")["pass"].get<bool>());
   EXPECT_NE(entry(report, "frf_continuous4_F50_bilinear")["verdict"].get<std::string>().find("discrete-time"),
             std::string::npos);

@@ -84,6 +84,9 @@ CaseSpec spec_from_json(const json& j, const std::string& where) {
   s.data = g.text("data");
   s.frf = g.text("frf");
   s.meta = g.text("meta");
+  s.system = g.text("system");
+  if (!s.system.empty() && s.kind != CaseKind::Spectrum)
+    throw Error(ErrorKind::Input, g.where + " field \"system\"", "only a spectrum case names its system");
   if ((s.kind == CaseKind::Frf) != !s.frf.empty() || (s.kind != CaseKind::Frf && s.data.empty()) ||
       (s.kind == CaseKind::Records) != !s.meta.empty())
     throw Error(ErrorKind::Input, g.where,
@@ -131,6 +134,7 @@ json case_inputs_json(const CaseSpec& s) {
   if (!s.data.empty()) j["data"] = s.data;
   if (!s.frf.empty()) j["frf"] = s.frf;
   if (!s.meta.empty()) j["meta"] = s.meta;
+  if (!s.system.empty()) j["system"] = s.system;
   if (s.kind == CaseKind::Spectrum) {
     j["p"] = s.p;
     j["method"] = to_string(s.spectrum_method);
@@ -343,7 +347,7 @@ CaseScore score_candidate(const CertifiedCase& c, const StateSpace& candidate) {
     if (q.name == "poles") s.quantities.push_back(score_points(q, poles(candidate)));
     else if (q.name == "zeros") s.quantities.push_back(score_points(q, zeros(candidate)));
     else if (q.name == "S") s.quantities.push_back(score_grid(q, [&](double w) { return power_spectrum(candidate, at(w)); }));
-    else if (q.name == "factor")
+    else if (q.name == "factor" || q.name == "exact_factor")
       s.quantities.push_back(score_grid(q, [&](double w) { return normalised_factor(candidate, at(w)); }));
     else if (q.name == "G") s.quantities.push_back(score_grid(q, [&](double w) { return transfer(candidate, at(w)); }));
   }

@@ -30,6 +30,9 @@ struct CaseSpec {
   std::string name, tier, description, made_by;
   CaseKind kind = CaseKind::Spectrum;
   std::string data, frf, meta;  ///< spectrum or records CSV; FRF CSV; records meta
+  /// Noise-free spectrum cases: the minimum-phase system the data were sampled
+  /// from (its exact factor is certified as "exact_factor").
+  std::string system;
   int order = 0;
   int p = 0, r = 0;             ///< p: spectra only
   Method spectrum_method = Method::Akcay2011;
@@ -59,7 +62,7 @@ std::vector<CaseSpec> read_suite_manifest(const std::string& suite);
 /// at the frequencies `omega` (empty for poles and zeros), each with its
 /// number of certified significant digits (relative to its Frobenius norm).
 struct CertifiedQuantity {
-  std::string name;  ///< "poles", "zeros", "S" (spectrum), "factor", "G"
+  std::string name;  ///< "poles", "zeros", "S" (spectrum), "factor", "exact_factor", "G"
   std::vector<double> omega;
   int rows = 1, cols = 1;
   std::vector<Eigen::MatrixXcd> values;
