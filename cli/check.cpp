@@ -23,6 +23,8 @@ int run(const CheckCommand& c) {
       throw Error(ErrorKind::Input, "check",
                   "give the data the candidate was identified from: --data SPECTRUM.csv (Akcay 2011), --frf FRF.csv "
                   "or --data RECORDS.csv --meta META.json (Pintelon 2002)");
+    if (!q.selection.empty())
+      throw Error(ErrorKind::Input, "--input/--output/--skip-periods", "apply to periodic records (--data with --meta)");
     if (q.r > 0 || !q.method.empty() || q.omega_scale > 0)
       throw Error(ErrorKind::Input, q.r > 0 ? "--r" : !q.method.empty() ? "--method" : "--omega-scale",
                   "applies to FRF and record candidates (--frf, or --data with --meta); a spectral factor's p and "
@@ -46,6 +48,7 @@ void register_check(CLI::App& app, Action& chosen) {
   frf->excludes(data)->excludes(meta);
   meta->needs(data);
   add_json_option(chk, c->json_path, "write the comparison here (- = stdout)");
+  add_record_selection_options(chk, q.selection);
   chk->add_option("--tolerance", q.tolerance, "relative tolerance (default: derived, see README)");
   chk->add_option("--r", q.r, "FRF/records: r of the candidate when its JSON has none (default: V_SUB selection)")
       ->check(CLI::Range(2, 100000));

@@ -136,6 +136,17 @@ CLI::Option* add_plot_option(CLI::App* sub, std::string& path) {
           "FILE.svg|FILE.png"));
 }
 
+void add_record_selection_options(CLI::App* sub, RecordSelection& selection) {
+  sub->add_option("--input", selection.inputs,
+                  "records: the input column(s) by header name, e.g. --input Force (with --output; any header, "
+                  "other columns ignored)");
+  sub->add_option("--output", selection.outputs, "records: the output column(s) by header name, e.g. --output Acceleration1");
+  sub->add_option("--skip-periods", selection.skip_periods,
+                  "records: drop this many leading periods (a transient); the meta's periods are reduced by it")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+}
+
 void emit_json(const std::string& path, const nlohmann::json& j) {
   if (!path.empty()) write_text_file(path, j.dump(2) + "\n");
 }

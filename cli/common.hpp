@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fdsid/format.hpp"
+#include "fdsid/io.hpp"
 #include "fdsid/plot.hpp"
 
 namespace fdsid::cli {
@@ -40,6 +41,7 @@ void register_conformance(CLI::App& app, Action& chosen);        // conformance.
 void register_sample_spectrum(CLI::App& app, Action& chosen);    // sample_spectrum.cpp
 void register_simulate_records(CLI::App& app, Action& chosen);   // simulate.cpp
 void register_gap(CLI::App& app, Action& chosen);                // gap.cpp (gap, gap-validate)
+void register_records(CLI::App& app, Action& chosen);            // records.cpp (frf, validate)
 
 /// "fdsid: unknown subcommand ..." (or reproduce target) on stderr and true
 /// when argv names one that is not registered: CLI11 alone would say "A
@@ -86,6 +88,10 @@ CLI::Validator output_path(const std::string& option);
 CLI::Option* add_json_option(CLI::App* sub, std::string& path, const std::string& what);
 /// --plot FILE (.svg or .png); checked when given.
 CLI::Option* add_plot_option(CLI::App* sub, std::string& path);
+/// --input NAME, --output NAME (repeatable: the records' columns by header
+/// name) and --skip-periods K (leading periods dropped), for commands that
+/// read periodic records (fdsid::RecordSelection).
+void add_record_selection_options(CLI::App* sub, RecordSelection& selection);
 
 // ---------------------------------------------------------------------------
 // Output

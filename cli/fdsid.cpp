@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   register_certify(app, chosen);
   register_sample_spectrum(app, chosen);
   register_gap(app, chosen);
+  register_records(app, chosen);
 
   if (unknown_subcommand(app, argc, argv)) return 2;
   try {

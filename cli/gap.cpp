@@ -18,6 +18,7 @@ namespace {
 struct GapCommand {
   std::string model_path, data_path, meta_path, json_path, plot_path, table_path;
   GapOptions options;
+  RecordSelection selection;
 };
 
 struct GapValidateCommand {
@@ -58,12 +59,11 @@ int run_gap(const GapCommand& c) {
   Out out{c.json_path == "-"};
   const GapOptions& o = c.options;
   const StateSpace model = read_model(c.model_path);
-  int inputs = 0;
-  const Eigen::MatrixXd rec = read_records_csv(c.data_path, inputs);
-  const RecordMeta meta = read_meta(c.meta_path);
+  const Records records = read_records(c.data_path, c.meta_path, c.selection);
+  const RecordMeta& meta = records.meta;
   GapReport r;
   try {
-    r = diagnose_gap(model, rec, inputs, meta, o);
+    r = diagnose_gap(model, records.samples, records.inputs, meta, o);
   } catch (const Error& e) {
     throw e.within(c.data_path);
   }
@@ -144,6 +144,7 @@ void register_gap_diagnosis(CLI::App& app, Action& chosen) {
   gap->add_option("--meta", c->meta_path, "meta JSON: period, periods, sample_time, excited_lines")->required();
   add_json_option(gap, c->json_path, "write the report here (- = stdout)");
   add_plot_option(gap, c->plot_path);
+  add_record_selection_options(gap, c->selection);
   gap->add_option("--table", c->table_path, "write the plot-ready table (frequency, t before/after, flag) here")->check(output_path("--table"));
   // Levels checked at parse time, named by their option (review finding 21:
   // "--alpha 5" was blamed on the data file).

@@ -213,9 +213,10 @@ int sample_spectrum_high(const std::string& model_path, int M, const std::string
 
 reference::SampleStatistics records_high(const FrfHighRequest& q, const std::string& domain,
                                          reference::Real& sample_time) {
-  int inputs = 0;
-  const Eigen::MatrixXd samples = read_records_csv(q.data_path, inputs);
-  const RecordMeta meta = read_meta(q.meta_path);
+  const Records rec = read_records(q.data_path, q.meta_path, q.selection);
+  const Eigen::MatrixXd& samples = rec.samples;
+  const int inputs = rec.inputs;
+  const RecordMeta& meta = rec.meta;
   std::vector<std::vector<reference::Real>> channels(samples.cols());
   for (Eigen::Index c = 0; c < samples.cols(); ++c)
     for (Eigen::Index t = 0; t < samples.rows(); ++t) channels[c].push_back(exact(samples(t, c)));
@@ -376,7 +377,33 @@ struct RecordSettings {
   RecordTreatment treatment = RecordTreatment::Plain;
   EivVariance eiv_variance = EivVariance::Data;
   double min_input_snr = 10;
+  RecordSelection selection;
 };
+
+// The candidate's column selection and skipped periods (identify-frf writes
+// them into "source"): taken when the command line gives none; a command line
+// that gives others contradicts the candidate (exit 2).
+void read_selection(const json& src, const FrfCheckRequest& q, RecordSettings& s) {
+  RecordSelection json_sel;
+  try {
+    if (src.contains("input_columns")) json_sel.inputs = src["input_columns"].get<std::vector<std::string>>();
+    if (src.contains("output_columns")) json_sel.outputs = src["output_columns"].get<std::vector<std::string>>();
+    if (src.contains("skip_periods")) json_sel.skip_periods = src["skip_periods"].get<int>();
+  } catch (const json::exception&) {
+    throw Error(ErrorKind::Input, q.model_path + " field \"source\"",
+                "input_columns/output_columns must be arrays of names, skip_periods an integer");
+  }
+  if (q.selection.empty()) {
+    s.selection = json_sel;
+  } else {
+    if (!json_sel.empty() && (json_sel.inputs != q.selection.inputs || json_sel.outputs != q.selection.outputs ||
+                              json_sel.skip_periods != q.selection.skip_periods))
+      throw Error(ErrorKind::Input, "--input/--output/--skip-periods",
+                  "contradict the candidate's \"source\" (" + src.dump() +
+                      "); drop the options: check repeats what the candidate JSON says it did");
+    s.selection = q.selection;
+  }
+}
 
 RecordSettings record_settings(const json& cj, const FrfCheckRequest& q) {
   RecordSettings s;
@@ -387,9 +414,11 @@ RecordSettings record_settings(const json& cj, const FrfCheckRequest& q) {
                                : RecordTreatment::Plain;
     s.eiv_variance = q.eiv_model_variance ? EivVariance::Model : EivVariance::Data;
     if (q.min_input_snr > 0) s.min_input_snr = q.min_input_snr;
+    s.selection = q.selection;
     return s;
   }
   const json& src = cj["source"];
+  read_selection(src, q, s);
   const json* treated = src.contains("errors_in_variables") ? &src["errors_in_variables"]
                         : src.contains("improper")          ? &src["improper"]
                                                             : nullptr;
@@ -461,16 +490,15 @@ FrfData data_and_settings(const FrfCheckRequest& q, const StateSpace& candidate,
   if (from_frf) {
     data = read_frf_csv(q.frf_path, c.domain);
   } else {
-    int inputs = 0;
-    const Eigen::MatrixXd samples = read_records_csv(q.data_path, inputs);
-    const RecordMeta meta = read_meta(q.meta_path);
+    const Records rec = read_records(q.data_path, q.meta_path, c.rec.selection);
+    const RecordMeta& meta = rec.meta;
     require_sample_subspace_periods(meta, q.meta_path);
     if (c.domain == Domain::Discrete && std::abs(candidate.sample_time - meta.sample_time) > 1e-5 * meta.sample_time)
       throw Error(ErrorKind::Input, q.model_path + " field \"sample_time\"",
                   fmt(candidate.sample_time, 10) + " differs from the records' " + fmt(meta.sample_time, 10) + " (" +
                       q.meta_path + "): the candidate was identified from other data");
     try {
-      stats = record_statistics(samples, inputs, meta, c.domain);
+      stats = record_statistics(rec.samples, rec.inputs, meta, c.domain);
     } catch (const Error& e) {
       throw e.within(q.data_path + " with " + q.meta_path);
     }
@@ -505,6 +533,22 @@ FrfData data_and_settings(const FrfCheckRequest& q, const StateSpace& candidate,
   return data;
 }
 
+// The order the data support at the candidate's settings: fdsid's automatic
+// order (identify-frf --order auto, the largest gap of step 1c's singular
+// values above the noise level) at r; 0 when none can be read.
+int supported_order(const FrfData& data, const CandidateSettings& c) {
+  FrfOptions o;
+  o.order = 0;
+  o.r = c.r;
+  o.continuous = c.method;
+  o.omega_scale = c.ws;
+  try {
+    return identify_frf(data, o).order;
+  } catch (const Error&) {
+    return 0;
+  }
+}
+
 }  // namespace
 
 int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
@@ -527,7 +571,26 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
   hq.treatment = c.rec.treatment;
   hq.eiv_variance = c.rec.eiv_variance;
   hq.min_input_snr = c.rec.min_input_snr;
-  const reference::FrfResult res = reference_frf(hq);
+  hq.selection = c.rec.selection;
+  reference::FrfResult res;
+  std::string order_note;
+  try {
+    res = reference_frf(hq);
+  } catch (const Error& e) {
+    // The reference cannot identify these data at the candidate's order (a
+    // step fails): a disagreement about the order, not bad input. The
+    // reference identifies them at the order they support, and the candidate
+    // is compared with that model (the orders then differ), as for spectra.
+    const int supported = supported_order(data, c);
+    if (e.kind() != ErrorKind::Numerical || supported < 1 || supported == candidate.order() || supported >= c.r) throw;
+    const std::string what = e.what();
+    const auto at = what.find("step ");
+    order_note = "the reference fails at the candidate's order " + std::to_string(candidate.order()) +
+                 (at == std::string::npos ? std::string() : " (" + what.substr(at, what.find(':', at) - at) + ")") +
+                 "; the data support order " + std::to_string(supported) + ", which the candidate is compared with";
+    hq.order = supported;
+    res = reference_frf(hq);
+  }
 
   FrfOracleCheck k;
   k.candidate_path = q.model_path;
@@ -552,6 +615,17 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
   k.tolerance.method = c.method;
   k.tolerance.omega_scale = c.ws;
   k.comparison = compare_frf_models(candidate, ref, data.omega, dense_frequency_grid(c.domain, data.omega), k.tolerance);
+  k.order_note = order_note;
+  if (order_note.empty()) {
+    // The comparison is at the candidate's order (a setting of the
+    // algorithm, like r); say when the data show another.
+    const int supported = supported_order(data, c);
+    if (supported > 0 && supported != candidate.order())
+      k.order_note = "note: the data support order " + std::to_string(supported) +
+                     " (identify-frf --order auto at r = " + std::to_string(c.r) +
+                     "); the candidate has order " + std::to_string(candidate.order()) +
+                     ", and is compared with the reference at its own order";
+  }
   if (json_path != "-") std::cout << k.summary();
   if (!json_path.empty()) write_text_file(json_path, to_json(k).dump(2) + "\n");
   return k.agree() ? 0 : 1;

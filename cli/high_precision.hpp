@@ -3,6 +3,8 @@
 // from the subcommand files so that only this file sees the multiprecision types.
 #include <string>
 
+#include "fdsid/io.hpp"
+
 #include "fdsid/spectrum_id.hpp"
 #include "fdsid/workflow.hpp"
 
@@ -36,6 +38,7 @@ struct FrfCheckRequest {
   /// Records: --eiv / --improper / --eiv-variance model / --min-input-snr when the candidate JSON has no "source".
   bool eiv = false, improper = false, eiv_model_variance = false;
   double min_input_snr = 0;  ///< 0: from the JSON, else 10 (identify-frf's default)
+  RecordSelection selection;  ///< records: columns by name, skipped periods (as the candidate's identification read them)
 };
 
 /// Identify with the reference at the candidate's settings and compare G on
@@ -60,6 +63,7 @@ struct FrfHighRequest {
   RecordTreatment treatment = RecordTreatment::Plain;
   EivVariance eiv_variance = EivVariance::Data;
   double min_input_snr = 10;
+  RecordSelection selection;  ///< records: columns by name, skipped periods
 };
 
 /// `identify-frf --precision high`: Pintelon (2002) Algorithm 1/2 in 50

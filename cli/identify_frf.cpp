@@ -24,6 +24,7 @@ struct IdentifyFrfCommand {
   EivVariance eiv_variance = EivVariance::Data;
   double min_input_snr = 10;
   bool eiv = false, improper = false;
+  RecordSelection selection;
 };
 
 // --precision high: the reference identifies for a given order and r; the
@@ -39,6 +40,7 @@ int run_high(const IdentifyFrfCommand& c, const FrfData& data, const SampleStati
   q.frf_path = c.frf_path;
   q.data_path = c.data_path;
   q.meta_path = c.meta_path;
+  q.selection = c.selection;
   q.continuous = c.domain == Domain::Continuous;
   q.orthogonal = c.method == ContinuousMethod::Orthogonal;
   q.omega_scale = c.options.omega_scale;
@@ -75,6 +77,8 @@ int run(const IdentifyFrfCommand& c) {
   const bool from_frf = !c.frf_path.empty();
   if (!from_frf && c.data_path.empty())
     throw Error(ErrorKind::Input, "identify-frf", "give either --frf FILE or --data FILE --meta FILE");
+  if (from_frf && !c.selection.empty())
+    throw Error(ErrorKind::Input, "--input/--output/--skip-periods", "apply to periodic records (--data --meta), not to --frf");
   if (c.options.r < 0 || c.options.r_max < 0) throw Error(ErrorKind::Input, "--r", "must be positive");
   refuse_overwrite(c.plot_path, {c.frf_path, c.data_path, c.meta_path, c.json_path}, "--plot");
   refuse_overwrite(c.json_path, {c.frf_path, c.data_path, c.meta_path}, "--json");
@@ -91,12 +95,11 @@ int run(const IdentifyFrfCommand& c) {
     source.frf_path = c.frf_path;
     source.known_variance = data.has_noise_model;
   } else {
-    int inputs = 0;
-    const Eigen::MatrixXd samples = read_records_csv(c.data_path, inputs);
-    const RecordMeta meta = read_meta(c.meta_path);
+    const Records rec = read_records(c.data_path, c.meta_path, c.selection);
+    const RecordMeta& meta = rec.meta;
     require_sample_subspace_periods(meta, c.meta_path);
     try {
-      stats = record_statistics(samples, inputs, meta, c.domain);
+      stats = record_statistics(rec.samples, rec.inputs, meta, c.domain);
     } catch (const Error& e) {
       throw e.within(c.data_path + " with " + c.meta_path);
     }
@@ -104,6 +107,7 @@ int run(const IdentifyFrfCommand& c) {
     source.data_path = c.data_path;
     source.meta_path = c.meta_path;
     source.periods = meta.periods;
+    source.selection = c.selection;
     source.treatment = c.eiv        ? RecordTreatment::ErrorsInVariables
                        : c.improper ? RecordTreatment::Improper
                                     : RecordTreatment::Plain;
@@ -163,6 +167,7 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
   meta->needs(data);
   add_json_option(idf, c->json_path, "write the identified model here (- = stdout)");
   add_plot_option(idf, c->plot_path);
+  add_record_selection_options(idf, c->selection);
   idf->add_option("--order", o.order, "model order n_a, or auto (from the singular values of step 1c)")
       ->transform(order_value());
   idf->add_option("--max-order", o.max_order, "largest order --order auto considers (default min(20, r p - 1))")

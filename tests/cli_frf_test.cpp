@@ -911,6 +911,24 @@ TEST_F(CliFrf, CheckCatchesTheClassicMistakes) {
   // number per frequency of constant modulus, and both estimates coincide.)
 }
 
+// Issue 13: the order is a setting of the algorithm, like r: a correct
+// estimate at order 2 agrees with the reference at order 2, and check names
+// the order the data support (identify-frf --order auto at the candidate's r).
+TEST_F(CliFrf, CheckNamesTheOrderTheDataSupport) {
+  const std::string d = write("d.csv", noisy_frf_csv(pintelon_plant(), discrete_grid(60), 1e-3));
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--frf", d, "--order", "2", "--r", "8", "--json", path("low.json")})));
+  const RunResult r = run_fdsid({"check", "--model", path("low.json"), "--frf", d, "--json", path("verdict.json")});
+  const json v = read_json("verdict.json");
+  expect_verdict(r, true, v);
+  EXPECT_NE(r.out.find("the data support order 4"), std::string::npos) << r.out;
+  EXPECT_NE(v["order_note"].get<std::string>().find("candidate has order 2"), std::string::npos) << v["order_note"];
+  // A candidate of the right order carries no such note.
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--frf", d, "--order", "4", "--r", "8", "--json", path("ok.json")})));
+  const RunResult ok = run_fdsid({"check", "--model", path("ok.json"), "--frf", d, "--json", path("ok_verdict.json")});
+  expect_verdict(ok, true, read_json("ok_verdict.json"));
+  EXPECT_EQ(read_json("ok_verdict.json")["order_note"], "");
+}
+
 // Review finding 13: a power basis numerically dependent on a narrow band was
 // reported as "C_Y is not positive definite (variances too small)". The
 // message names the band and the ways out.
@@ -981,3 +999,168 @@ TEST_F(CliFrf, CheckRefusesWhatItCannotCompare) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------
+// Real records as they come (issue 14, item 4): columns by name, a transient
+// period skipped, records turned into an FRF file, a model validated on a record.
+
+namespace {
+
+/// The u,y record `csv` rewritten as a measurement file would have it: a
+/// quoted header with other columns ("Time", "Voltage", an "Fs" column empty
+/// below its first row), a trailing comma on every line, and `transient`
+/// leading rows of a start-up transient (garbage) before the periodic part.
+/// The u and y cells keep their text, so the numbers read back exactly.
+std::string as_measured(const std::string& csv, int transient) {
+  std::istringstream in(csv);
+  std::string line, out = "\"Time\",\"Force\",\"Voltage\",\"Acceleration1\",\"Fs\",\n";
+  std::getline(in, line);  // u,y
+  char buf[200];
+  for (int t = 0; t < transient; ++t) {
+    std::snprintf(buf, sizeof buf, "%d,%g,0.5,%g,%s,\n", t, 100.0 * std::sin(t), -50.0 * std::cos(t), t == 0 ? "1" : "");
+    out += buf;
+  }
+  for (int t = transient; std::getline(in, line); ++t) {
+    const auto comma = line.find(',');
+    out += std::to_string(t) + "," + line.substr(0, comma) + ",0.25," + line.substr(comma + 1) + "," +
+           (t == 0 ? "1" : "") + ",\n";
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_F(CliFrf, RecordsAsTheyComeColumnsByNameAndSkippedPeriods) {
+  simulate(256, 8, 1e-3, "rec");
+  std::ifstream f(path("rec.csv"));
+  const std::string csv((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  const std::string measured = write("measured.csv", as_measured(csv, 256));
+  json meta = read_json("rec.meta.json");
+  meta["periods"] = 9;  // the transient period and the 8 periodic ones
+  const std::string meta9 = write("measured.meta.json", meta.dump());
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"), "--order",
+                                   "4", "--r", "8", "--json", path("plain.json")})));
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--data", measured, "--meta", meta9, "--input", "Force", "--output",
+                                   "Acceleration1", "--skip-periods", "1", "--order", "4", "--r", "8", "--json",
+                                   path("named.json")})));
+  // The same numbers reach the algorithm: the same model, bit for bit.
+  const json plain = read_json("plain.json"), named = read_json("named.json");
+  EXPECT_EQ(plain["poles"], named["poles"]);
+  EXPECT_EQ(plain["A"], named["A"]);
+  EXPECT_EQ(named["source"]["input_columns"], json::array({"Force"}));
+  EXPECT_EQ(named["source"]["skip_periods"], 1);
+  // check repeats the candidate's reading from its "source" (no options needed).
+  const RunResult chk = run_fdsid({"check", "--model", path("named.json"), "--data", measured, "--meta", meta9,
+                                   "--json", path("verdict.json")});
+  EXPECT_EQ(chk.status, 0) << describe(chk);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", path("named.json"), "--data", measured, "--meta", meta9,
+                                    "--input", "Voltage", "--output", "Acceleration1", "--skip-periods", "1"}),
+                         {"contradict the candidate"}));
+  // Bad selections are named, before any work.
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", measured, "--meta", meta9, "--input", "force", "--output",
+                                    "Acceleration1"}),
+                         {"--input \"force\" is not a column", "Time, Force, Voltage, Acceleration1, Fs"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", measured, "--meta", meta9, "--input", "Force"}),
+                         {"--input", "--output"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", measured, "--meta", meta9, "--input", "Force", "--output",
+                                    "Acceleration1", "--skip-periods", "9"}),
+                         {"--skip-periods", "leaves no period"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", measured, "--meta", meta9, "--input", "Fs", "--output",
+                                    "Acceleration1"}),
+                         {"line 3", "column Fs", "empty value"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", write("g.csv", frf_csv(pintelon_plant(), {0.5, 1.0}, 1e-6)),
+                                    "--skip-periods", "1"}),
+                         {"--skip-periods", "records"}));
+  // gap takes the same options.
+  const std::string model = write("plant.json", kPintelonModel);
+  const RunResult gap = run_fdsid({"gap", "--model", model, "--data", measured, "--meta", meta9, "--input", "Force",
+                                   "--output", "Acceleration1", "--skip-periods", "1", "--json", path("gap.json")});
+  EXPECT_EQ(gap.status, 0) << describe(gap);
+}
+
+// fdsid frf: G = Y/U at the excited lines and G_var = E|dG|^2 (first order).
+// Statistical checks at a stated level (each fails a correct implementation
+// with probability < 1e-6): white output noise of std sigma, noise-free input,
+// M periods, the unitary DFT of Eq. (4), so E|dY_k|^2 = sigma^2 and
+// E|dG_k|^2 = sigma^2 / (M |U_k|^2).
+TEST_F(CliFrf, FrfFromRecordsCarriesTheFrfAndItsVariance) {
+  const int P = 256, M = 8;
+  const double sigma = 1e-2;
+  simulate(P, M, 0.0, "clean");
+  simulate(P, M, sigma, "noisy");  // the same seed: the same multisine
+  ASSERT_TRUE(Succeeded(run_fdsid({"frf", "--data", path("noisy.csv"), "--meta", path("noisy.meta.json"), "--out",
+                                   path("g.csv"), "--json", path("frf.json")})));
+  const fdsid::FrfData g = fdsid::read_frf_csv(path("g.csv"), fdsid::Domain::Discrete);
+  const json meta = read_json("noisy.meta.json");
+  const std::vector<int> lines = meta["excited_lines"].get<std::vector<int>>();
+  ASSERT_EQ(g.frequencies(), static_cast<int>(lines.size()));
+  // U_k of one period of the noise-free input (unitary DFT, direct sums).
+  std::ifstream f(path("clean.csv"));
+  std::string line;
+  std::getline(f, line);
+  std::vector<double> u;
+  for (int t = 0; t < P && std::getline(f, line); ++t) u.push_back(std::stod(line.substr(0, line.find(','))));
+  ASSERT_EQ(static_cast<int>(u.size()), P);
+  const fdsid::StateSpace plant = pintelon_plant();
+  double T = 0, ratio_mean = 0;
+  for (int i = 0; i < g.frequencies(); ++i) {
+    const int k = lines[i];
+    EXPECT_NEAR(g.omega(i), 2 * M_PI * k / P, 1e-15) << "line " << k;
+    std::complex<double> U = 0;
+    for (int t = 0; t < P; ++t) U += u[t] * std::polar(1.0, -2 * M_PI * k * t / P);
+    U /= std::sqrt(double(P));
+    const double truth_var = sigma * sigma / (M * std::norm(U));
+    const std::complex<double> G_true = fdsid::transfer(plant, std::polar(1.0, 2 * M_PI * k / P))(0, 0);
+    T += std::norm(g.Y[i](0, 0) - G_true) / truth_var;  // Exp(1) each at the true variance
+    ratio_mean += g.variance[i](0, 0) / truth_var;        // chi2_{2(M-1)} / (2(M-1)) each
+  }
+  const double F = g.frequencies();
+  ratio_mean /= F;
+  // T: sum of F Exp(1) terms, mean F, sd sqrt(F); 5 sd.
+  EXPECT_NEAR(T, F, 5 * std::sqrt(F)) << "G = Y/U misses the truth beyond its own variance";
+  // The estimated variance's mean over the lines: mean 1, sd sqrt(1 / ((M-1) F)); 5 sd.
+  EXPECT_NEAR(ratio_mean, 1.0, 5 * std::sqrt(1.0 / ((M - 1) * F))) << "G_var is not E|dG|^2";
+  // Identification from the file it wrote: the Eq. (36) plant's four poles.
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--frf", path("g.csv"), "--order", "4", "--r", "8", "--json",
+                                   path("from_frf.json")})));
+  EXPECT_EQ(read_json("from_frf.json")["poles"].size(), 4u);
+  // A record with two outputs has no FRF file (one channel), and says how to choose one.
+  EXPECT_TRUE(IsBadInput(run_fdsid({"frf", "--data", write("two.csv", "u,y1,y2\n1,2,3\n"), "--meta",
+                                    path("noisy.meta.json"), "--out", path("two_g.csv")}),
+                         {"--input", "--output"}));
+}
+
+// fdsid validate: MATLAB compare's fit of a model on a record.
+TEST_F(CliFrf, ValidateScoresAModelOnARecord) {
+  simulate(256, 4, 0.0, "rec");
+  const std::string truth = write("plant.json", kPintelonModel);
+  // The true model reproduces its own noise-free steady state to rounding:
+  // NRMSE <= 10 log2(P) u max|G|/min|G| = 10 * 8 * 1.1e-16 * 100 ~ 1e-12 (the
+  // plant's |G| spans less than 100 over the lines); 1e-10 stated.
+  ASSERT_TRUE(Succeeded(run_fdsid({"validate", "--model", truth, "--data", path("rec.csv"), "--meta",
+                                   path("rec.meta.json"), "--json", path("fit.json")})));
+  const json fit = read_json("fit.json");
+  ASSERT_EQ(fit["outputs"].size(), 1u);
+  EXPECT_LE(fit["outputs"][0]["nrmse"].get<double>(), 1e-10);
+  // A gain error of 10 %: yhat = 1.1 y, so NRMSE = 0.1 and the fit 90 % exactly
+  // (y has no DC line: its mean is rounding).
+  json gain = json::parse(kPintelonModel);
+  for (auto& c : gain["C"][0]) c = 1.1 * std::stod(c.get<std::string>());
+  gain["D"][0][0] = 1.1 * std::stod(gain["D"][0][0].get<std::string>());
+  const std::string wrong = write("gain.json", gain.dump());
+  const RunResult r = run_fdsid({"validate", "--model", wrong, "--data", path("rec.csv"), "--meta",
+                                 path("rec.meta.json"), "--min-fit", "95", "--json", path("gain_fit.json")});
+  EXPECT_EQ(r.status, 1) << describe(r);
+  EXPECT_NEAR(read_json("gain_fit.json")["outputs"][0]["fit_percent"].get<double>(), 90.0, 1e-8);
+  // A model of another sample time, or with a pole outside the circle, is refused.
+  json slow = json::parse(kPintelonModel);
+  slow["sample_time"] = 0.5;
+  EXPECT_TRUE(IsBadInput(run_fdsid({"validate", "--model", write("slow.json", slow.dump()), "--data", path("rec.csv"),
+                                    "--meta", path("rec.meta.json")}),
+                         {"sample_time", "differs"}));
+  json unstable = json::parse(kPintelonModel);
+  unstable["A"][0][0] = "1.5";
+  EXPECT_TRUE(IsBadInput(run_fdsid({"validate", "--model", write("unstable.json", unstable.dump()), "--data",
+                                    path("rec.csv"), "--meta", path("rec.meta.json")}),
+                         {"unstable pole"}));
+}

@@ -1,5 +1,6 @@
 #include "fdsid/io.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -477,6 +478,65 @@ Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int
   if (rows == 0) input_error(name, "no samples");
   return Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
       values.data(), rows, static_cast<Eigen::Index>(cols));
+}
+
+Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int& inputs,
+                                  const RecordSelection& selection) {
+  if (selection.inputs.empty() && selection.outputs.empty()) return parse_records_csv(in, name, inputs);
+  if (selection.inputs.empty() || selection.outputs.empty())
+    input_error(selection.inputs.empty() ? "--output" : "--input",
+                "give the input columns (--input NAME) and the output columns (--output NAME) together");
+  const CsvHeader csv = read_csv_header(in, name, "with the columns named by --input and --output");
+  const auto& header = csv.cells;
+  std::vector<size_t> chosen;
+  auto find = [&](const std::string& want, const char* option) {
+    const auto at = std::find(header.begin(), header.end(), want);
+    if (at == header.end()) {
+      std::string names;
+      for (const auto& h : header)
+        if (!h.empty()) names += (names.empty() ? "" : ", ") + h;
+      input_error(name + " line 1", std::string(option) + " \"" + want + "\" is not a column of the header (" + names + ")");
+    }
+    const size_t c = static_cast<size_t>(at - header.begin());
+    if (std::find(chosen.begin(), chosen.end(), c) != chosen.end())
+      input_error(option, "column \"" + want + "\" is chosen twice");
+    chosen.push_back(c);
+  };
+  for (const auto& h : selection.inputs) find(h, "--input");
+  for (const auto& h : selection.outputs) find(h, "--output");
+  inputs = static_cast<int>(selection.inputs.size());
+  std::vector<double> values;
+  for_each_csv_row(in, name, csv, [&](const std::vector<std::string>& cells, const std::string& where) {
+    for (size_t c : chosen) values.push_back(parse_cell(cells[c], where + " column " + header[c]));
+  });
+  const size_t cols = chosen.size();
+  const Eigen::Index rows = static_cast<Eigen::Index>(values.size() / cols);
+  if (rows == 0) input_error(name, "no samples");
+  return Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      values.data(), rows, static_cast<Eigen::Index>(cols));
+}
+
+Records read_records(const std::string& data_path, const std::string& meta_path, const RecordSelection& selection) {
+  Records r;
+  r.meta = read_meta(meta_path);
+  const int skip = selection.skip_periods;
+  if (skip < 0) input_error("--skip-periods", "must be 0 or more");
+  if (skip >= r.meta.periods)
+    input_error("--skip-periods", std::to_string(skip) + " leaves no period of the " + std::to_string(r.meta.periods) +
+                                      " that " + meta_path + " lists");
+  check_readable_file(data_path, "data file");
+  std::ifstream f(data_path);
+  if (!f) input_error(data_path, std::string("cannot open data file (") + std::strerror(errno) + ")");
+  r.samples = parse_records_csv(f, data_path, r.inputs, selection);
+  if (skip > 0) {
+    const Eigen::Index drop = static_cast<Eigen::Index>(skip) * r.meta.period;
+    if (r.samples.rows() <= drop)
+      input_error(data_path, "has " + std::to_string(r.samples.rows()) + " samples; --skip-periods " +
+                                 std::to_string(skip) + " drops " + std::to_string(drop));
+    r.samples = Eigen::MatrixXd(r.samples.bottomRows(r.samples.rows() - drop));
+    r.meta.periods -= skip;
+  }
+  return r;
 }
 
 Eigen::MatrixXd read_records_csv(const std::string& path, int& inputs) {

@@ -32,6 +32,11 @@ json to_json(const FrfSource& s) {
        {"meta", s.meta_path},
        {"periods", s.periods},
        {"variance", "sample variance over the periods / M (Pintelon 2002 Eq. 25)"}};
+  if (!s.selection.inputs.empty()) {
+    j["input_columns"] = s.selection.inputs;
+    j["output_columns"] = s.selection.outputs;
+  }
+  if (s.selection.skip_periods > 0) j["skip_periods"] = s.selection.skip_periods;
   if (s.treatment == RecordTreatment::ErrorsInVariables)
     j["errors_in_variables"] = {{"variance", s.eiv_variance == EivVariance::Model ? "Eq. (31) at the first-pass model"
                                                                                   : "Eq. (31), corrected (conj U)"},
@@ -207,6 +212,7 @@ json to_json(const FrfOracleCheck& k) {
             {"g_relative", c.g_relative},
             {"summary", k.summary()},
             {"note", k.settings_note},
+            {"order_note", k.order_note},
             {"tolerance",
              {{"backward_perturbation", k.backward_perturbation},
               {"safety_factor", FrfTolerance::kSafety},

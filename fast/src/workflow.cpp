@@ -89,6 +89,7 @@ std::string quantity_text(const char* name, const OracleQuantity& q, bool at_ome
 std::string FrfOracleCheck::summary() const {
   const FrfModelComparison& c = comparison;
   std::string out = settings_note.empty() ? "" : settings_note + "\n";
+  if (!order_note.empty()) out += order_note + "\n";
   if (c.candidate_order != c.reference_order)
     out += "orders differ: candidate " + std::to_string(c.candidate_order) + ", reference " +
            std::to_string(c.reference_order) + "\n";

@@ -45,6 +45,34 @@ Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int
 /// The SISO records CSV text (header u,y; %.17g, so a double reads back exactly).
 std::string records_csv(const Eigen::MatrixXd& samples);
 
+/// Real records as they come (issue 14): the input and output columns chosen
+/// by their header names (any header; the other columns, even with empty
+/// cells, are ignored), and leading periods dropped (a transient).
+struct RecordSelection {
+  std::vector<std::string> inputs, outputs;  ///< header names; both empty: the u…, y… header of the format
+  int skip_periods = 0;                      ///< leading whole periods dropped; the meta's M is reduced by it
+  bool empty() const { return inputs.empty() && outputs.empty() && skip_periods == 0; }
+};
+
+/// A records CSV read with its meta and a selection: samples (P·M rows, the
+/// inputs then the outputs), the number of inputs, the meta with M reduced by
+/// the skipped periods.
+struct Records {
+  Eigen::MatrixXd samples;
+  int inputs = 0;
+  RecordMeta meta;
+};
+
+/// Purpose: read `data_path` and `meta_path` as `selection` says.
+/// Fails: Error(Input) naming the file: a named column not in the header (the
+/// header's names listed), --input without --output or the reverse, a name
+/// given twice, an empty or non-numeric cell in a chosen column (its line),
+/// skip_periods < 0 or ≥ the meta's periods, fewer rows than the skipped
+/// periods need.
+Records read_records(const std::string& data_path, const std::string& meta_path, const RecordSelection& selection = {});
+Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int& inputs,
+                                  const RecordSelection& selection);
+
 /// Meta JSON: {"period": P, "periods": M, "sample_time": Ts, "excited_lines": [k, …]}.
 RecordMeta read_meta(const std::string& path);
 RecordMeta meta_from_json(const nlohmann::json& j, const std::string& where);

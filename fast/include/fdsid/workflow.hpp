@@ -11,6 +11,7 @@
 
 #include "fdsid/compare.hpp"
 #include "fdsid/frf_id.hpp"
+#include "fdsid/io.hpp"
 #include "fdsid/model.hpp"
 #include "fdsid/spectrum_id.hpp"
 
@@ -49,6 +50,7 @@ struct FrfSource {
   EivVariance eiv_variance = EivVariance::Data;
   double min_input_snr = 10;         ///< the line rule of Eq. (34) (ErrorsInVariables, Improper)
   int dropped_lines = 0;             ///< lines dropped by that rule
+  RecordSelection selection;         ///< columns by name, skipped periods (written when used)
 };
 
 /// V_SUB (Eq. 35) judged against its law under a right model and noise model
@@ -186,6 +188,10 @@ struct FrfOracleCheck {
   double omega_scale = 0;                ///< ω_s used (continuous)
   std::string method_name;               ///< frf_method_name
   std::string settings_note;             ///< where r, method, ω_s came from
+  /// A candidate of another order than the data support: "the data support
+  /// order k (…); the candidate has order n", or the reference's failure at
+  /// the candidate's order and the order it was compared at instead.
+  std::string order_note;
   FrfModelComparison comparison;
   double backward_perturbation = 0;      ///< relative size of the perturbations behind the tolerance
   FrfTolerance tolerance;

@@ -1,0 +1,124 @@
+// fdsid frf and fdsid validate: measured periodic records as users have them
+// (issue 14). frf turns a record into an FRF file with its variance (Pintelon
+// 2002 Section 4.1); validate scores a model on a record it was not
+// identified from (the NRMSE fit of MATLAB's compare).
+#include <memory>
+
+#include "common.hpp"
+#include "fdsid/error.hpp"
+#include "fdsid/io.hpp"
+#include "fdsid/records.hpp"
+#include "fdsid/workflow.hpp"
+
+namespace fdsid::cli {
+
+namespace {
+
+const std::map<std::string, Domain> kDomains = {{"discrete", Domain::Discrete}, {"continuous", Domain::Continuous}};
+
+struct FrfCommand {
+  std::string data_path, meta_path, out_path, json_path;
+  RecordSelection selection;
+  Domain domain = Domain::Discrete;
+};
+
+int run_frf(const FrfCommand& c) {
+  refuse_overwrite(c.out_path, {c.data_path, c.meta_path}, "--out");
+  refuse_overwrite(c.json_path, {c.data_path, c.meta_path, c.out_path}, "--json");
+  const Records rec = read_records(c.data_path, c.meta_path, c.selection);
+  if (rec.inputs != 1 || rec.samples.cols() != 2)
+    throw Error(ErrorKind::Input, c.data_path,
+                "has " + std::to_string(rec.inputs) + " input and " + std::to_string(rec.samples.cols() - rec.inputs) +
+                    " output columns; an FRF file holds one input and one output: choose them with --input NAME "
+                    "--output NAME");
+  FrfData frf;
+  try {
+    frf = frf_from_records(record_statistics(rec.samples, rec.inputs, rec.meta, c.domain));
+  } catch (const Error& e) {
+    throw e.within(c.data_path + " with " + c.meta_path);
+  }
+  write_text_file(c.out_path, frf_csv(frf));
+  Out out{c.json_path == "-"};
+  out << "wrote " << c.out_path << ": G = Y/U and G_var at " << frf.frequencies() << " excited lines from M = "
+      << rec.meta.periods << " periods (omega in " << (c.domain == Domain::Discrete ? "rad/sample" : "rad/s")
+      << "; identify-frf --frf " << c.out_path
+      << (c.domain == Domain::Continuous ? " --domain continuous" : "") << ")\n";
+  emit_json(c.json_path, {{"data", c.data_path},
+                          {"meta", c.meta_path},
+                          {"out", c.out_path},
+                          {"domain", to_string(c.domain)},
+                          {"frequencies", frf.frequencies()},
+                          {"periods", rec.meta.periods},
+                          {"variance", "first-order E|dG|^2 of Y/U from the sample (co)variances over the periods / M"}});
+  return 0;
+}
+
+struct ValidateCommand {
+  std::string model_path, data_path, meta_path, json_path;
+  RecordSelection selection;
+  double min_fit = -1e300;  // percent; below it: exit 1
+};
+
+int run_validate(const ValidateCommand& c) {
+  refuse_overwrite(c.json_path, {c.model_path, c.data_path, c.meta_path}, "--json");
+  const StateSpace model = read_model(c.model_path);
+  const Records rec = read_records(c.data_path, c.meta_path, c.selection);
+  RecordFit fit;
+  try {
+    fit = fit_on_record(model, rec);
+  } catch (const Error& e) {
+    throw e.within(c.model_path + " on " + c.data_path);
+  }
+  Out out{c.json_path == "-"};
+  const int m = rec.inputs;
+  nlohmann::json outputs = nlohmann::json::array();
+  bool below = false;
+  for (size_t o = 0; o < fit.nrmse.size(); ++o) {
+    const std::string name =
+        c.selection.outputs.empty() ? "output " + std::to_string(o + 1) : c.selection.outputs[o];
+    out << name << ": fit " << fmt(fit.fit_percent[o], 4) << " % (NRMSE " << fmt(fit.nrmse[o], 4) << ")\n";
+    outputs.push_back({{"output", name}, {"column", m + static_cast<int>(o) + 1}, {"nrmse", fit.nrmse[o]},
+                       {"fit_percent", fit.fit_percent[o]}});
+    below = below || fit.fit_percent[o] < c.min_fit;
+  }
+  out << "the model's periodic steady-state response to the record's input against its output, both averaged over "
+      << fit.periods << " periods, DC left out (fit = 100 (1 - ||y - yhat|| / ||y - mean y||), as MATLAB's compare)\n";
+  if (below) out << "below --min-fit " << fmt(c.min_fit, 4) << " %\n";
+  emit_json(c.json_path, {{"model", c.model_path},
+                          {"data", c.data_path},
+                          {"meta", c.meta_path},
+                          {"periods_averaged", fit.periods},
+                          {"lines", fit.lines},
+                          {"outputs", outputs},
+                          {"pass", !below}});
+  return below ? 1 : 0;
+}
+
+}  // namespace
+
+void register_records(CLI::App& app, Action& chosen) {
+  auto f = std::make_shared<FrfCommand>();
+  auto* frf = app.add_subcommand("frf", "periodic records to an FRF file (G = Y/U with its variance, SISO)");
+  frf->add_option("--data", f->data_path, "periodic records CSV")->required();
+  frf->add_option("--meta", f->meta_path, "meta JSON of the records")->required();
+  frf->add_option("--out", f->out_path, "FRF CSV to write: omega,G_re,G_im,G_var")->check(output_path("--out"))->required();
+  frf->add_option("--domain", f->domain, "discrete (omega in rad/sample) or continuous (rad/s)")
+      ->transform(choice(kDomains, "is neither discrete nor continuous"))
+      ->default_str("discrete");
+  add_json_option(frf, f->json_path, "write a record of what was written here (- = stdout)");
+  add_record_selection_options(frf, f->selection);
+  on_parsed(frf, f, chosen, run_frf);
+
+  auto v = std::make_shared<ValidateCommand>();
+  auto* val = app.add_subcommand("validate", "fit of a model on a periodic record (NRMSE per output, as MATLAB's compare)");
+  val->add_option("--model", v->model_path, "model JSON (discrete with the record's sample time, or continuous)")
+      ->required();
+  val->add_option("--data", v->data_path, "periodic records CSV")->required();
+  val->add_option("--meta", v->meta_path, "meta JSON of the records")->required();
+  val->add_option("--min-fit", v->min_fit, "exit 1 when an output's fit is below this many percent");
+  add_json_option(val, v->json_path, "write the fit here (- = stdout)");
+  add_record_selection_options(val, v->selection);
+  on_parsed(val, v, chosen, run_validate);
+}
+
+}  // namespace fdsid::cli
