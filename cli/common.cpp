@@ -147,6 +147,19 @@ void add_record_selection_options(CLI::App* sub, RecordSelection& selection) {
       ->capture_default_str();
 }
 
+void add_strict_option(CLI::App* sub, bool& strict) {
+  sub->add_flag("--strict", strict,
+                "exit 1 and write nothing when the estimate is unusable in double precision (its estimated relative "
+                "error is 1 or more: no correct digit)");
+}
+
+bool refused_as_unusable(bool strict, double error_estimate) {
+  if (!strict || usable_precision(error_estimate)) return false;
+  std::cerr << "fdsid: --strict: the estimate is unusable in double precision (estimated relative error "
+            << fmt(error_estimate, 3) << "); nothing written\n";
+  return true;
+}
+
 void emit_json(const std::string& path, const nlohmann::json& j) {
   if (!path.empty()) write_text_file(path, j.dump(2) + "\n");
 }

@@ -92,6 +92,12 @@ CLI::Option* add_plot_option(CLI::App* sub, std::string& path);
 /// name) and --skip-periods K (leading periods dropped), for commands that
 /// read periodic records (fdsid::RecordSelection).
 void add_record_selection_options(CLI::App* sub, RecordSelection& selection);
+/// --strict: an estimate unusable in double precision (fdsid::usable_precision
+/// false) exits 1 and writes nothing (review finding 38).
+void add_strict_option(CLI::App* sub, bool& strict);
+/// With --strict and an unusable estimate: one line on stderr, true (the
+/// caller returns 1 before writing anything).
+bool refused_as_unusable(bool strict, double error_estimate);
 
 // ---------------------------------------------------------------------------
 // Output

@@ -23,7 +23,7 @@ struct IdentifyFrfCommand {
   Precision precision = Precision::Double;
   EivVariance eiv_variance = EivVariance::Data;
   double min_input_snr = 10;
-  bool eiv = false, improper = false;
+  bool eiv = false, improper = false, strict = false;
   RecordSelection selection;
 };
 
@@ -144,6 +144,7 @@ int run(const IdentifyFrfCommand& c) {
   out << fit.summary() << "\n";
   if (c.improper) out << "the model is the inverse system 1/G (improper G, Pintelon 2002 Section 5)\n";
   for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
+  if (refused_as_unusable(c.strict, res.error_estimate)) return 1;
   nlohmann::json j = to_json(res, method, source);
   j["fit"] = to_json(fit);
   emit_json(c.json_path, j);
@@ -167,6 +168,7 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
   meta->needs(data);
   add_json_option(idf, c->json_path, "write the identified model here (- = stdout)");
   add_plot_option(idf, c->plot_path);
+  add_strict_option(idf, c->strict);
   add_record_selection_options(idf, c->selection);
   idf->add_option("--order", o.order, "model order n_a, or auto (from the singular values of step 1c)")
       ->transform(order_value());

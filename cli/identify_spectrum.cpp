@@ -18,6 +18,7 @@ struct IdentifySpectrumCommand {
   std::string data_path, json_path, plot_path;
   SpectrumOptions options;  // order 0 = auto, p and r 0 = default_pr
   Precision precision = Precision::Double;
+  bool strict = false;
 };
 
 int run(const IdentifySpectrumCommand& c) {
@@ -46,6 +47,7 @@ int run(const IdentifySpectrumCommand& c) {
   out << "Riccati: " << res.riccati_method << ", " << res.riccati_iterations << " iterations, residual "
       << sci(res.riccati_residual, 1) << "\n";
   for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
+  if (refused_as_unusable(c.strict, res.error_estimate)) return 1;
   emit_json(c.json_path, to_json(res, c.data_path));
   emit_plot(c.plot_path, plot::spectrum_figure(data, res));
   return 0;
@@ -62,6 +64,7 @@ void register_identify_spectrum(CLI::App& app, Action& chosen) {
   ids->add_option("--data", c->data_path, "power-spectrum CSV")->required();
   add_json_option(ids, c->json_path, "write the identified model here (- = stdout)");
   add_plot_option(ids, c->plot_path);
+  add_strict_option(ids, c->strict);
   ids->add_option("--order", o.order, "model order n, or auto")->transform(order_value());
   ids->add_option("--p", o.p, "block rows of Y (default: min(50, M), at least 2n+1)");
   ids->add_option("--r", o.r, "block columns of Y (default: min(50, N - p), at least 2n)");

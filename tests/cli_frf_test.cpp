@@ -1164,3 +1164,29 @@ TEST_F(CliFrf, ValidateScoresAModelOnARecord) {
                                     path("rec.csv"), "--meta", path("rec.meta.json")}),
                          {"unstable pole"}));
 }
+
+// Review finding 38: a precision warning says whether the model is usable,
+// and --strict turns "unusable" into exit 1 with nothing written. An order
+// above the data's (6 for the fourth-order plant, noise-free) puts sigma_5,
+// sigma_6 of step 1c at the rounding level: the condition sigma_1/sigma_6 is
+// ~1/u and the estimate u * condition reaches 1.
+TEST_F(CliFrf, AnUnusableEstimateIsSaidAndStrictRefusesIt) {
+  const std::string d = write("clean.csv", frf_csv(pintelon_plant(), discrete_grid(60), 1e-6));
+  const RunResult r = run_fdsid({"identify-frf", "--frf", d, "--order", "6", "--r", "10", "--json", path("m.json")});
+  ASSERT_EQ(r.status, 0) << describe(r);
+  EXPECT_NE(r.out.find("warning: UNUSABLE in double precision"), std::string::npos) << r.out;
+  const json m = read_json("m.json");
+  EXPECT_FALSE(m["diagnostics"]["usable"].get<bool>());
+  EXPECT_GE(m["diagnostics"]["error_estimate"].get<double>(), 1.0);
+  const RunResult s = run_fdsid({"identify-frf", "--frf", d, "--order", "6", "--r", "10", "--strict", "--json",
+                                 path("strict.json")});
+  EXPECT_EQ(s.status, 1) << describe(s);
+  EXPECT_NE(s.err.find("--strict: the estimate is unusable"), std::string::npos) << s.err;
+  EXPECT_FALSE(fs::exists(path("strict.json")));
+  // The right order is usable, warns of nothing, and --strict lets it through.
+  const RunResult ok = run_fdsid({"identify-frf", "--frf", d, "--order", "4", "--r", "8", "--strict", "--json",
+                                  path("ok.json")});
+  EXPECT_EQ(ok.status, 0) << describe(ok);
+  EXPECT_EQ(ok.out.find("precision"), std::string::npos) << ok.out;
+  EXPECT_TRUE(read_json("ok.json")["diagnostics"]["usable"].get<bool>());
+}

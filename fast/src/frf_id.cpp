@@ -672,10 +672,8 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
   // B̂, D̂ (and so Ĝ) also carry the conditioning of step 3's least squares.
   res.condition = std::max(res.condition, step3_condition);
   res.error_estimate = kUnitRoundoff * res.condition;
-  if (!(res.error_estimate <= 1e-6))
-    res.warnings.push_back("double precision may have lost accuracy: estimated relative error of A " +
-                           fmt(res.error_estimate, 3) + " (condition " + fmt(res.condition, 3) +
-                           "); compare with --precision high");
+  if (const std::string w = precision_warning(res.error_estimate, "A", "condition " + fmt(res.condition, 3)); !w.empty())
+    res.warnings.push_back(w);
   res.v_sub = v_sub(est, d);
   res.poles = poles(est);
   const std::string unstable = instability_warning(est.domain, res.poles);

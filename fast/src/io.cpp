@@ -274,7 +274,8 @@ nlohmann::json result_to_json(const SpectrumResult& r) {
                       {"riccati_method", r.riccati_method},
                       {"riccati_iterations", r.riccati_iterations},
                       {"riccati_residual", r.riccati_residual},
-                      {"error_estimate", r.error_estimate}};
+                      {"error_estimate", r.error_estimate},
+                      {"usable", usable_precision(r.error_estimate)}};
   j["warnings"] = r.warnings;
   return j;
 }
@@ -609,7 +610,10 @@ nlohmann::json frf_result_to_json(const FrfResult& r, const std::string& method)
   nlohmann::json scan = nlohmann::json::array();
   for (const auto& [rr, v] : r.r_scan) scan.push_back({{"r", rr}, {"v_sub", v}});
   j["r_scan"] = scan;
-  j["diagnostics"] = {{"condition", r.condition}, {"error_estimate", r.error_estimate}, {"noise_edge", r.noise_edge}};
+  j["diagnostics"] = {{"condition", r.condition},
+                      {"error_estimate", r.error_estimate},
+                      {"usable", usable_precision(r.error_estimate)},
+                      {"noise_edge", r.noise_edge}};
   j["warnings"] = r.warnings;
   return j;
 }

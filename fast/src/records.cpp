@@ -24,7 +24,10 @@ FrfData frf_from_records(const SampleStatistics& stats) {
   for (int k = 0; k < F; ++k) {
     const cplx U = d.U[k](0, 0), g = d.Y[k](0, 0) / U;
     G[k](0, 0) = g;
-    // data.variance is σ̂²_Y / M; var_U and cov_YU are not divided by M.
+    // data.variance is σ̂²_Y / M; var_U and cov_YU are not divided by M. The
+    // bracket is the sample variance of Y_l − Ĝ U_l over the periods, ≥ 0
+    // but for rounding (clipped: a zero, identical periods, is refused by
+    // frf_data as a variance that is not positive).
     const double var_e = d.variance[k](0, 0) +
                          (std::norm(g) * stats.var_U[k](0) - 2 * std::real(std::conj(g) * stats.cov_YU[k](0, 0))) / stats.M;
     var[k](0, 0) = std::max(var_e, 0.0) / std::norm(U);
@@ -53,6 +56,7 @@ RecordFit fit_on_record(const StateSpace& model, const Records& records) {
     throw Error(ErrorKind::Input, "model",
                 "has " + std::to_string(model.inputs()) + " inputs and " + std::to_string(model.outputs()) +
                     " outputs; the record has " + std::to_string(m) + " and " + std::to_string(p));
+  // 1e-5 relative: writers print at least 6 significant digits (as gap's rule).
   if (model.domain == Domain::Discrete && std::abs(model.sample_time - meta.sample_time) > 1e-5 * meta.sample_time)
     throw Error(ErrorKind::Input, "model field \"sample_time\"",
                 fmt(model.sample_time, 10) + " differs from the record's " + fmt(meta.sample_time, 10));

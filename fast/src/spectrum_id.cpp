@@ -751,10 +751,10 @@ void accuracy_warnings(SpectrumResult& res, int m) {
     kappa = rho < 1.0 ? 1.0 / (1.0 - rho * rho) : std::numeric_limits<double>::infinity();
   }
   res.error_estimate = double_precision_spectrum_tolerance(res.p, res.r, m, res.N, ratio) * kappa;
-  if (!(res.error_estimate <= 1e-6))
-    res.warnings.push_back("double precision may have lost accuracy: estimated relative error " +
-                           fmt(res.error_estimate, 3) + " (sigma_1/sigma_2n = " + fmt(ratio, 3) +
-                           ", 1/(1 - rho^2) = " + fmt(kappa, 3) + "); compare with --precision high");
+  if (const std::string w = precision_warning(res.error_estimate, "the spectrum",
+                                               "sigma_1/sigma_2n = " + fmt(ratio, 3) + ", 1/(1 - rho^2) = " + fmt(kappa, 3));
+      !w.empty())
+    res.warnings.push_back(w);
   // A weak mode left out by the largest-gap rule shows as a second gap: a
   // pair σ_{2k-1}, σ_{2k} standing above the tail. The warning needs
   // σ_{2k}/σ_{2k+1} >= 10 (a mode one decade above what follows it, the least

@@ -15,4 +15,17 @@ std::string fmt(double x, int digits);
 /// printf("%.*e", digits, x) prints it (e.g. sci(1234.56, 3) == "1.235e+03").
 std::string sci(double x, int digits = 3);
 
+/// The precision verdict of an estimate whose first-order relative error
+/// estimate is `estimate` (u × a condition number; review finding 38: a
+/// warning must say whether the model is usable). "" when estimate ≤ 1e-6
+/// (six or more correct digits: more than the summaries print); below 1
+/// "usable to about d
+/// significant digits", d = ⌊−log10 estimate⌋ (a bound: the true error is
+/// often smaller); 1 or more, or not finite, "UNUSABLE …": no digit is
+/// certain. `what` names the quantity and `details` the condition numbers.
+std::string precision_warning(double estimate, const std::string& what, const std::string& details);
+
+/// Whether an estimate with this relative error estimate has a correct digit (< 1).
+inline bool usable_precision(double estimate) { return estimate < 1.0; }
+
 }  // namespace fdsid

@@ -1,5 +1,6 @@
 #include "fdsid/format.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -16,6 +17,18 @@ std::string sci(double x, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*e", digits, x);
   return buf;
+}
+
+std::string precision_warning(double estimate, const std::string& what, const std::string& details) {
+  if (estimate <= 1e-6) return "";
+  if (usable_precision(estimate)) {
+    const int digits = static_cast<int>(std::floor(-std::log10(estimate)));
+    return "double precision may have lost accuracy: estimated relative error of " + what + " " + fmt(estimate, 3) +
+           " (" + details + "): usable to about " + std::to_string(digits) + " significant digit" +
+           (digits == 1 ? "" : "s") + " (a first-order bound; the true error is often smaller); compare with --precision high";
+  }
+  return "UNUSABLE in double precision: estimated relative error of " + what + " " + fmt(estimate, 3) + " (" + details +
+         ") leaves no correct digit; use --precision high, a lower order or another r (--strict: exit 1)";
 }
 
 }  // namespace fdsid
