@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
@@ -106,9 +107,17 @@ GapValidationCase run_case(const GapValidationOptions& o, int i, const std::file
 GapValidation validate_gap(const GapValidationOptions& o) {
   if (o.cases < 1) throw Error(ErrorKind::Input, "--cases", "must be at least 1");
   namespace fs = std::filesystem;
-  fs::path dir = o.workdir.empty() ? fs::temp_directory_path() / ("fdsid-gap-validate-" + std::to_string(o.seed))
-                                   : fs::path(o.workdir);
+  // Without --workdir: a fresh folder of its own (mkdtemp). A name made from
+  // the seed alone was shared by two runs with the same seed, which then
+  // removed each other's files (CliFrf.GapValidate* in parallel under ctest -j2).
+  fs::path dir = o.workdir;
   std::error_code ec;
+  if (o.workdir.empty()) {
+    std::string pattern = (fs::temp_directory_path() / ("fdsid-gap-validate-" + std::to_string(o.seed) + "-XXXXXX")).string();
+    if (!mkdtemp(pattern.data()))
+      throw Error(ErrorKind::Input, "gap-validate", "cannot create a folder under " + fs::temp_directory_path().string());
+    dir = pattern;
+  }
   fs::create_directories(dir, ec);
   if (ec) throw Error(ErrorKind::Input, "--workdir", "cannot create \"" + dir.string() + "\": " + ec.message());
   GapValidation v;
