@@ -10,6 +10,7 @@
 
 #include "fdsid/error.hpp"
 #include "fdsid/figures.hpp"
+#include "fdsid/frf_id.hpp"
 #include "fdsid/model.hpp"
 #include "fdsid/paper.hpp"
 #include "fdsid/gap.hpp"
@@ -110,7 +111,14 @@ TEST(Figures, Table1ShowsTheCollapseOfSigma5BesideTheRankOfY) {
   const Figure f = fdsid::plot::table1_figure(rows);
   ASSERT_EQ(f.panels.size(), 2u);
   const Panel &vo = f.panels[0], &ak = f.panels[1];
-  EXPECT_TRUE(vo.x.log && vo.y.log && ak.x.log && ak.y.log);
+  EXPECT_TRUE(vo.y.log && ak.y.log);
+  // One tick per M, named (review finding 44), and σ_k in one colour in both panels.
+  ASSERT_EQ(vo.x.categories.size(), rows.size());
+  EXPECT_EQ(vo.x.categories.front(), std::to_string(rows.front().M));
+  for (int k = 1; k <= 5; ++k)
+    EXPECT_EQ(find_series(vo, "#gs#d" + std::to_string(k) + "#u")->colour,
+              find_series(ak, "#gs#d" + std::to_string(k) + "#u")->colour)
+        << "sigma_" << k;
   const Series* s5 = find_series(vo, "#gs#d5#u");
   const Series* y8 = find_series(ak, "#gs#d8#u");
   ASSERT_NE(s5, nullptr);
@@ -141,6 +149,9 @@ TEST(Figures, GapFigureCarriesEveryStageAndTheBands) {
   ASSERT_EQ(f.panels.size(), 2u);
   const Panel& t = f.panels[0];
   EXPECT_TRUE(t.y.log);
+  // Lines 1 ... 127 (the default odd lines below P/4) span two decades: a log
+  // frequency axis (review finding 47).
+  EXPECT_TRUE(t.x.log);
   ASSERT_GE(r.steps.size(), 2u);  // the model and at least the gain correction
   EXPECT_EQ(r.steps.front().first, "model");
   EXPECT_EQ(r.steps.back().second, r.t_after);
@@ -149,6 +160,133 @@ TEST(Figures, GapFigureCarriesEveryStageAndTheBands) {
   // Every candidate effect is named on the second panel's axis, best first.
   ASSERT_EQ(f.panels[1].x.categories.size(), r.candidates.size());
   for (size_t i = 0; i < r.candidates.size(); ++i) EXPECT_EQ(f.panels[1].x.categories[i], to_string(r.candidates[i].effect()));
+}
+
+// identify-frf's figure (review findings 30, 48, 49): the singular values'
+// index axis has whole-number ticks, the line drawn is the order rule's
+// threshold σ² = 2 × edge (not the edge), and the title names the r the order
+// was read at beside the model's r when they differ.
+TEST(Figures, FrfFigureDrawsTheOrderThresholdAtTheROfTheOrderPass) {
+  const fdsid::StateSpace g = fdsid::pintelon_plant();
+  fdsid::RecordOptions o;
+  o.period = 128;
+  o.periods = 6;
+  o.output_noise_std = 0.01;
+  o.seed = 5;
+  for (int k = 1; k < 64; k += 2) o.lines.push_back(k);
+  fdsid::RecordMeta meta;
+  const Eigen::MatrixXd rec = fdsid::simulate_periodic_record(g, o, meta);
+  const fdsid::FrfData d = fdsid::record_statistics(rec, 1, meta, fdsid::Domain::Discrete).data;
+  fdsid::FrfOptions fo;  // order auto, r by V_SUB
+  const fdsid::FrfResult res = fdsid::identify_frf(d, fo);
+  ASSERT_GT(res.noise_edge, 0);
+  const Figure f = fdsid::plot::frf_figure(d, res);
+  ASSERT_EQ(f.panels.size(), 5u);  // |G|, phase (review finding 43), residual, singular values, poles
+  EXPECT_EQ(f.panels[1].y.label, "phase of G (degrees)");
+  const Panel& sv = f.panels[3];
+  EXPECT_TRUE(sv.x.integer);
+  const Series* threshold = find_series(sv, "order threshold #gs#u2#d = 2 × noise edge (Marchenko-Pastur)");
+  ASSERT_NE(threshold, nullptr);
+  EXPECT_DOUBLE_EQ(threshold->y.at(0), std::sqrt(2 * res.noise_edge));
+  // The order rule: σ_n above the threshold, σ_{n+1} not (Pintelon 2002 Section 5 as fast/ applies it).
+  EXPECT_GT(res.singular_values(res.order - 1), threshold->y[0]);
+  EXPECT_LE(res.singular_values(res.order), threshold->y[0]);
+  if (res.order_r != res.r)
+    EXPECT_NE(sv.title.find("(r = " + std::to_string(res.order_r) + "; model: r = " + std::to_string(res.r) + ")"),
+              std::string::npos)
+        << sv.title;
+  else
+    EXPECT_NE(sv.title.find("(r = " + std::to_string(res.r) + ")"), std::string::npos) << sv.title;
+}
+
+// Review finding 7: one experiment on two inputs holds no FRF per input; the
+// figure draws the model alone and the outputs' residual |Y − Ĝ U|, which is
+// at the noise level for the model that generated the data.
+TEST(Figures, FrfFigureOfOneExperimentOnTwoInputsDrawsNoDataFrf) {
+  const fdsid::StateSpace g = fdsid::pintelon_plant();
+  fdsid::FrfData d;
+  d.domain = fdsid::Domain::Discrete;
+  const int F = 40;
+  d.omega.resize(F);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> n01;
+  for (int k = 0; k < F; ++k) {
+    d.omega(k) = M_PI * (k + 0.5) / F;
+    Eigen::MatrixXcd U(2, 1);
+    U << std::polar(1.0, 6.28 * n01(rng)), std::polar(1.0, 6.28 * n01(rng));
+    const std::complex<double> z = std::polar(1.0, d.omega(k));
+    const std::complex<double> G1 = fdsid::transfer(g, z)(0, 0), G2 = 0.5 / (z - 0.8);
+    d.U.push_back(U);
+    d.Y.push_back(Eigen::MatrixXcd::Constant(1, 1, G1 * U(0, 0) + G2 * U(1, 0)));
+    d.variance.push_back(Eigen::MatrixXd::Constant(1, 1, 1e-6));
+  }
+  fdsid::FrfResult res;  // the two-input model that generated the data: [G1 G2]
+  res.order = 5;
+  res.r = res.order_r = 10;
+  res.model.domain = fdsid::Domain::Discrete;
+  res.model.A = Eigen::MatrixXd::Zero(5, 5);
+  res.model.A.topLeftCorner(4, 4) = g.A;
+  res.model.A(4, 4) = 0.8;
+  res.model.B = Eigen::MatrixXd::Zero(5, 2);
+  res.model.B.topLeftCorner(4, 1) = g.B;
+  res.model.B(4, 1) = 1;
+  res.model.C = Eigen::MatrixXd::Zero(1, 5);
+  res.model.C.leftCols(4) = g.C;
+  res.model.C(0, 4) = 0.5;
+  res.model.D = Eigen::MatrixXd::Zero(1, 2);
+  res.model.D(0, 0) = g.D(0, 0);
+  res.singular_values = Eigen::VectorXd::LinSpaced(10, 10, 1);
+  const Figure f = fdsid::plot::frf_figure(d, res);
+  const Panel &mag = f.panels[0], &resid = f.panels[2];
+  EXPECT_NE(mag.title.find("no data FRF per input"), std::string::npos) << mag.title;
+  for (const Series& s : mag.series) EXPECT_EQ(s.label.rfind("data", 0), std::string::npos) << s.label;
+  const Series* r = find_series(resid, "output residual");
+  ASSERT_NE(r, nullptr);
+  ASSERT_EQ(r->y.size(), static_cast<size_t>(F));
+  // Exact data: the residual is rounding, |Y| u times a few (≤ 1e-12 for |Y| ≤ 1e3).
+  for (double e : r->y) EXPECT_LE(e, 1e-12);
+}
+
+// Review finding 41: the legend moves off the data. Poles in the upper right
+// (a pole-zero map's positive frequencies) send it elsewhere; an empty upper
+// right keeps the preferred corner.
+TEST(Figures, TheLegendTakesTheEmptiestCorner) {
+  Panel p;
+  Series s;
+  s.line = false;
+  s.x = {0.8, 0.9, 0.85, -0.9};
+  s.y = {0.8, 0.9, 0.6, -0.9};  // three in the upper right, one in the lower left
+  p.series = {s};
+  p.legend = fdsid::plot::LegendAt::TopRight;
+  const auto corner = fdsid::plot::legend_corner(p, 3, -1, 1, -1, 1);
+  EXPECT_TRUE(corner == fdsid::plot::LegendAt::TopLeft || corner == fdsid::plot::LegendAt::BottomRight) << int(corner);
+  p.series[0].x = {-0.9};
+  p.series[0].y = {-0.9};
+  EXPECT_EQ(fdsid::plot::legend_corner(p, 3, -1, 1, -1, 1), fdsid::plot::LegendAt::TopRight);
+}
+
+// Review finding 45: the failure share is a share (axis to 1.05, not 1.5),
+// and the paper's Table 2 values stand beside the reproduction at the paper's
+// ε (Akçay 2011 Table 2: M = 1000 ... 32000).
+TEST(Figures, Table2FigureOverlaysThePapersValues) {
+  fdsid::Table2Options o;
+  o.epsilon = 1e-3;
+  o.realizations = 2;
+  fdsid::Table2Row row;
+  row.M = 1000;
+  row.l2 = 1e-4;
+  row.linf = 5e-4;
+  row.l2_all = {1e-4, 1e-4};
+  row.linf_all = {5e-4, 5e-4};
+  const Figure f = fdsid::plot::table2_figure({row}, o);
+  const Series* paper = find_series(f.panels[0], "Akcay (2011) Table 2, L#d2#u");
+  ASSERT_NE(paper, nullptr);
+  ASSERT_EQ(paper->x.size(), 6u);
+  EXPECT_EQ(paper->x.front(), 1000);
+  EXPECT_EQ(paper->y.front(), 1.55e-4);  // Table 2, M = 1,000
+  EXPECT_LE(f.panels[1].y.max, 1.05);
+  o.epsilon = 1e-2;  // another ε: nothing of the paper's to compare with
+  EXPECT_EQ(find_series(fdsid::plot::table2_figure({row}, o).panels[0], "Akcay (2011) Table 2, L#d2#u"), nullptr);
 }
 
 // ---------------------------------------------------------------------------

@@ -44,11 +44,13 @@ double quantile(std::vector<double> v, double q) {
 }
 
 // Singular values with the order read between σ_k and σ_{k+1} marked.
+// noise_level > 0: a horizontal line there, labelled noise_label.
 Panel singular_value_panel(const Eigen::VectorXd& sv, int marked, const std::string& title, const std::string& mark_label,
-                           double noise_level) {
+                           double noise_level, const std::string& noise_label = "") {
   Panel p;
   p.title = title;
   p.x = axis("index k", false);
+  p.x.integer = true;
   p.y = axis("singular value #gs#dk#u", true);
   Series s;
   s.label = "#gs#dk#u";
@@ -73,8 +75,7 @@ Panel singular_value_panel(const Eigen::VectorXd& sv, int marked, const std::str
     m.dashed = true;
     p.series.push_back(m);
   }
-  if (noise_level > 0)
-    p.series.push_back(hline("noise edge (Marchenko-Pastur)", 1, std::max<double>(2, sv.size()), noise_level, Grey));
+  if (noise_level > 0) p.series.push_back(hline(noise_label, 1, std::max<double>(2, sv.size()), noise_level, Grey));
   return p;
 }
 
@@ -96,7 +97,7 @@ Panel pole_zero_panel(const StateSpace& model) {
   ps.symbol = "×";
   ps.line = false;
   ps.colour = Red;
-  zs.label = "zeros";
+  zs.label = "zeros";  // with the count of those not drawn (below): the title stays short (review finding 42)
   zs.symbol = "○";
   zs.line = false;
   zs.colour = Blue;
@@ -129,7 +130,7 @@ Panel pole_zero_panel(const StateSpace& model) {
   }
   p.series = {ref, ps, zs};
   p.title = std::string("poles and zeros (") + (discrete ? "z" : "s") + "-plane)";
-  if (outside > 0) p.title += ", " + std::to_string(outside) + " zero(s) beyond 3·max|pole| not shown";
+  if (outside > 0) p.series.back().label += " (" + std::to_string(outside) + " beyond 3·max|pole| not drawn)";
   p.legend = LegendAt::TopRight;
   return p;
 }
@@ -147,22 +148,33 @@ Figure table1_figure(const std::vector<Table1Row>& rows) {
     p->y = axis("singular value", true);
     p->legend = LegendAt::BottomLeft;
   }
-  auto add = [&](Panel& p, const Eigen::VectorXd Table1Row::*field, int k, Colour c) {
+  // The x axis: one tick per row, named by its M (review finding 44: a log
+  // axis over 16 ... 512 labelled only 10²); M doubles from row to row, so the
+  // rows are evenly spaced in log M.
+  std::vector<std::string> Ms;
+  for (const Table1Row& r : rows) Ms.push_back(std::to_string(r.M));
+  for (Panel* p : {&vo, &ak}) {
+    p->x = axis("M (grid intervals, M + 1 samples on [0, #gp])", false, 0.5, rows.size() + 0.5);
+    p->x.categories = Ms;
+  }
+  // One colour per σ_k in both panels (finding 44: σ4 changed colour between
+  // them); σ5, the one that collapses on the left, in red.
+  const Colour sigma_colours[] = {Blue, Orange, Green, Purple, Red, Brown, Pink, Olive, Cyan, Black};
+  auto add = [&](Panel& p, const Eigen::VectorXd Table1Row::*field, int k) {
     Series s;
     s.label = sigma(k);
-    s.colour = c;
+    s.colour = sigma_colours[(k - 1) % 10];
     s.symbol = "•";
-    for (const Table1Row& r : rows)
-      if ((r.*field).size() >= k) {
-        s.x.push_back(r.M);
-        s.y.push_back((r.*field)(k - 1));
+    for (size_t i = 0; i < rows.size(); ++i)
+      if ((rows[i].*field).size() >= k) {
+        s.x.push_back(i + 1.0);
+        s.y.push_back((rows[i].*field)(k - 1));
       }
     p.series.push_back(s);
   };
-  const Colour vo_colours[] = {Blue, Orange, Green, Purple, Red};  // σ5, the one that collapses, in red
-  for (int k = 1; k <= 5; ++k) add(vo, &Table1Row::vo_sigmas, k, vo_colours[k - 1]);
+  for (int k = 1; k <= 5; ++k) add(vo, &Table1Row::vo_sigmas, k);
   const int two_n = rows.empty() ? 0 : static_cast<int>(rows.front().akcay_sigmas.size());
-  for (int k = 1; k <= two_n; ++k) add(ak, &Table1Row::akcay_sigmas, k, kCycle[(k - 1) % 10]);
+  for (int k = 1; k <= two_n; ++k) add(ak, &Table1Row::akcay_sigmas, k);
   // Rounding level of a double SVD: u σ_1 with u = 2^-53.
   for (Panel* p : {&vo, &ak}) {
     Series u;
@@ -170,10 +182,10 @@ Figure table1_figure(const std::vector<Table1Row>& rows) {
     u.colour = Grey;
     u.dashed = true;
     const Eigen::VectorXd Table1Row::*field = p == &vo ? &Table1Row::vo_sigmas : &Table1Row::akcay_sigmas;
-    for (const Table1Row& r : rows)
-      if ((r.*field).size() > 0) {
-        u.x.push_back(r.M);
-        u.y.push_back(std::ldexp((r.*field)(0), -53));
+    for (size_t i = 0; i < rows.size(); ++i)
+      if ((rows[i].*field).size() > 0) {
+        u.x.push_back(i + 1.0);
+        u.y.push_back(std::ldexp((rows[i].*field)(0), -53));
       }
     p->series.push_back(u);
   }
@@ -188,7 +200,9 @@ Figure table2_figure(const std::vector<Table2Row>& rows, const Table2Options& o)
   err.title = "Algorithm 1, #ge = " + num(o.epsilon) + ", " + std::to_string(o.realizations) +
               " realisations (bars: 10-90 %)";
   err.x = axis("M (grid intervals)", true);
-  err.y = axis("error of the identified spectrum", true);
+  // Review finding 45: what the error is (absolute, the paper's measured norms)
+  // and the paper's own values beside the reproduction.
+  err.y = axis("error of the identified spectrum: measured L#d2#u, L#d∞#u norms of Ŝ - S (absolute)", true);
   Series l2, linf;
   l2.label = "mean L#d2#u";
   l2.symbol = "•";
@@ -207,10 +221,34 @@ Figure table2_figure(const std::vector<Table2Row>& rows, const Table2Options& o)
     linf.y_low.push_back(quantile(r.linf_all, 0.1));
     linf.y_high.push_back(quantile(r.linf_all, 0.9));
   }
+  // Akçay (2011) Table 2 (100 realisations, p = r = 50, ε = 1e-3): the
+  // published means, drawn as printed.
+  Series paper_l2, paper_linf;
+  paper_l2.label = "Akcay (2011) Table 2, L#d2#u";
+  paper_l2.symbol = "○";
+  paper_l2.line = false;
+  paper_l2.colour = Blue;
+  paper_linf = paper_l2;
+  paper_linf.label = "Akcay (2011) Table 2, L#d∞#u";
+  paper_linf.colour = Orange;
+  paper_linf.symbol = "□";
+  const double published[6][3] = {{1000, 1.55e-4, 8.18e-4}, {2000, 4.79e-5, 2.53e-4}, {4000, 3.11e-5, 1.70e-4},
+                                  {8000, 1.87e-5, 1.02e-4}, {16000, 1.37e-5, 7.50e-5}, {32000, 9.47e-6, 5.16e-5}};
+  if (o.epsilon == 1e-3 && o.p == 50 && o.r == 50 && o.order == 4)  // the paper's setting
+    for (const auto& row : published) {
+      paper_l2.x.push_back(row[0]);
+      paper_l2.y.push_back(row[1]);
+      paper_linf.x.push_back(row[0]);
+      paper_linf.y.push_back(row[2]);
+    }
   err.series = {l2, linf};
+  if (!paper_l2.x.empty()) {
+    err.series.push_back(paper_l2);
+    err.series.push_back(paper_linf);
+  }
   fail.title = "failures: vo1997 at #ge = " + num(o.vo_epsilon) + " and Algorithm 1";
   fail.x = axis("M (grid intervals)", true);
-  fail.y = axis("share of runs that failed", false, -0.02, 1.5);  // the legend above 1
+  fail.y = axis("share of runs that failed", false, -0.02, 1.05);  // a share: 0 ... 1 (review finding 45)
   fail.legend = LegendAt::TopRight;
   Series step6, other, alg1;
   step6.label = "vo1997: failed at step 6 (no stable/antistable split)";
@@ -316,7 +354,7 @@ Figure spectrum_figure(const SpectrumData& d, const SpectrumResult& res) {
         ++non_positive;
       }
     }
-    model.label = "identified, n = " + std::to_string(res.order) + (m > 1 ? " #d" + ij + "#u" : std::string());
+    model.label = "identified" + (m > 1 ? " S#d" + ij + "#u" : std::string()) + " (n = " + std::to_string(res.order) + ")";
     model.colour = kCycle[(2 * a + 1) % 10];
     model.dashed = true;  // the data show between the dashes
     const int fine = std::min(4 * d.M, 4000);
@@ -332,7 +370,8 @@ Figure spectrum_figure(const SpectrumData& d, const SpectrumResult& res) {
   // samples (noise near a zero of the spectrum) cannot be shown on it.
   spec.y.log = hi > 10 * lo && non_positive <= (d.M + 1) * m / 100;
   if (spec.y.log && non_positive > 0)
-    spec.series.front().label += " (" + std::to_string(non_positive) + " <= 0 not shown)";
+    spec.series.front().label += " (" + std::to_string(non_positive) + (non_positive == 1 ? " sample" : " samples") +
+                                 " ≤ 0 not drawn on the log axis)";
   resid.title = "relative residual on the grid";
   resid.x = spec.x;
   resid.y = axis("||S#dk#u - Ŝ#dk#u||#dF#u / ||Ŝ#dk#u||#dF#u  (Ŝ: identified)", true);
@@ -381,41 +420,105 @@ Figure frf_figure(const FrfData& d, const FrfResult& res) {
   auto at = [&](double w) {
     return transfer(res.model, discrete ? std::polar(1.0, w) : cplx(0, w));
   };
+  // Records with fewer experiments than inputs (c < m, e.g. one multisine on
+  // two inputs) hold no FRF per input: Y U⁺ is no estimate of G (review
+  // finding 7). The model alone is drawn, and the residual is that of the
+  // outputs, |Y − Ĝ U|, against σ_Y.
+  const bool data_frf = d.columns() >= mi;
   Panel mag, resid;
-  mag.title = "FRF: data and identified model, order " + std::to_string(res.order);
+  mag.title = data_frf ? "FRF: data and identified model, order " + std::to_string(res.order)
+                       : "FRF of the identified model, order " + std::to_string(res.order) + " (" +
+                             std::to_string(d.columns()) + " experiment(s) for " + std::to_string(mi) +
+                             " inputs: no data FRF per input)";
   mag.x = axis(xl, logx);
   mag.y = axis("|G|", true);
-  resid.title = "residual |G#ddata#u - G#dmodel#u|";
+  resid.title = data_frf ? "residual |G#ddata#u - G#dmodel#u|" : "output residual |Y - G#dmodel#u U|";
   resid.x = mag.x;
-  resid.y = axis("|G#ddata#u - G#dmodel#u|", true);
+  resid.y = axis(data_frf ? "|G#ddata#u - G#dmodel#u|" : "|Y - G#dmodel#u U|", true);
+  // The phase panel (review finding 43: a Bode plot; |G| alone hides a delay
+  // and a phase misfit): the model's phase unwrapped along the dense grid,
+  // each data point on the model's branch at its frequency (model phase there
+  // plus arg(G_data / G_model)).
+  Panel phase;
+  phase.title = "phase";
+  phase.x = mag.x;
+  phase.y = axis("phase of G (degrees)", false);
+  const int fine = 2000;
+  std::vector<double> grid(fine + 1);
+  for (int q = 0; q <= fine; ++q)
+    grid[q] = logx ? wmin * std::pow(wmax / wmin, static_cast<double>(q) / fine) : wmin + (wmax - wmin) * q / fine;
+  auto nearest = [&](double w) {
+    if (!(wmax > wmin)) return 0;
+    const double t = logx ? std::log(w / wmin) / std::log(wmax / wmin) : (w - wmin) / (wmax - wmin);
+    return std::clamp(static_cast<int>(std::lround(t * fine)), 0, fine);
+  };
+  auto wrap = [](double a) { return a - 2 * kPi * std::round(a / (2 * kPi)); };
+  const double deg = 180 / kPi;
   for (int e = 0; e < entries; ++e) {
     const int i = e / mi, j = e % mi;
     const std::string ij = p * mi > 1 ? " #d" + std::to_string(i + 1) + std::to_string(j + 1) + "#u" : "";
-    Series data, model, r;
+    Series data, model, r, data_phase, model_phase;
     data.label = "data" + ij;
     data.colour = kCycle[(2 * e) % 10];
     data.line = false;
     data.symbol = "•";
     r = data;
     r.label = "residual" + ij;
+    model.label = "identified" + ij;
+    model.colour = kCycle[(2 * e + 1) % 10];
+    std::vector<double> unwrapped(fine + 1);
+    cplx previous = 0;
+    for (int q = 0; q <= fine; ++q) {
+      const cplx g = at(grid[q])(i, j);
+      model.x.push_back(grid[q] * hz);
+      model.y.push_back(std::abs(g));
+      unwrapped[q] = q == 0 ? std::arg(g) : unwrapped[q - 1] + std::arg(g / previous);
+      previous = g;
+    }
+    model_phase = model;
+    model_phase.y.clear();
+    for (double a : unwrapped) model_phase.y.push_back(a * deg);
+    data_phase = data;
     for (int k = 0; k < F; ++k) {
+      const cplx gm = at(d.omega(k))(i, j);
       data.x.push_back(d.omega(k) * hz);
       data.y.push_back(std::abs(G[k](i, j)));
       r.x.push_back(d.omega(k) * hz);
-      r.y.push_back(std::abs(G[k](i, j) - at(d.omega(k))(i, j)));
+      r.y.push_back(std::abs(G[k](i, j) - gm));
+      const int q = nearest(d.omega(k));
+      const double branch = unwrapped[q] + wrap(std::arg(gm) - std::arg(at(grid[q])(i, j)));
+      data_phase.x.push_back(d.omega(k) * hz);
+      data_phase.y.push_back((branch + std::arg(G[k](i, j) / gm)) * deg);
     }
-    model.label = "identified" + ij;
-    model.colour = kCycle[(2 * e + 1) % 10];
-    const int fine = 2000;
-    for (int q = 0; q <= fine; ++q) {
-      const double w = logx ? wmin * std::pow(wmax / wmin, static_cast<double>(q) / fine)
-                            : wmin + (wmax - wmin) * q / fine;
-      model.x.push_back(w * hz);
-      model.y.push_back(std::abs(at(w)(i, j)));
+    if (data_frf) {
+      mag.series.push_back(data);
+      resid.series.push_back(r);
+      phase.series.push_back(data_phase);
     }
-    mag.series.push_back(data);
     mag.series.push_back(model);
+    phase.series.push_back(model_phase);
+  }
+  for (int i = 0; !data_frf && i < p; ++i) {
+    Series r, sd;
+    const std::string out_i = p > 1 ? " #d" + std::to_string(i + 1) + "#u" : "";
+    r.label = "output residual" + out_i;
+    r.colour = kCycle[(2 * i) % 10];
+    r.line = false;
+    r.symbol = "•";
+    sd.label = "noise std #gs#dY#u" + out_i;
+    sd.colour = Grey;
+    sd.dashed = true;
+    for (int k = 0; k < F; ++k) {
+      const Eigen::MatrixXcd E = d.Y[k] - at(d.omega(k)) * d.U[k];
+      for (int c = 0; c < d.columns(); ++c) {
+        r.x.push_back(d.omega(k) * hz);
+        r.y.push_back(std::abs(E(i, c)));
+      }
+      sd.x.push_back(d.omega(k) * hz);
+      sd.y.push_back(std::sqrt(d.variance[k](i, 0)));
+    }
     resid.series.push_back(r);
+    if (d.has_noise_model) resid.series.push_back(sd);
   }
   if (p == 1 && mi == 1 && d.has_noise_model) {
     // Standard deviation of the data's G: σ_Y / |U| (σ²_Y is that of Ŷ).
@@ -433,10 +536,18 @@ Figure frf_figure(const FrfData& d, const FrfResult& res) {
   if (p * mi > entries) mag.title += " (first 4 entries)";
   mag.legend = LegendAt::BottomLeft;
   resid.legend = LegendAt::BottomLeft;
-  Panel sv = singular_value_panel(res.singular_values, res.order,
-                                  "singular values of step 1c (r = " + std::to_string(res.order_r) + ")",
-                                  "order n = " + std::to_string(res.order), std::sqrt(res.noise_edge));
-  f.panels = {mag, resid, sv, pole_zero_panel(res.model)};
+  // The r the order was read at, and the model's r when they differ (review
+  // finding 30); the line drawn is the order rule's threshold σ² = 2 × the
+  // Marchenko–Pastur edge (finding 48: the edge itself was drawn, labelled as
+  // if it were the threshold).
+  const std::string at_r = res.order_r == res.r ? "r = " + std::to_string(res.r)
+                                                : "r = " + std::to_string(res.order_r) + "; model: r = " +
+                                                      std::to_string(res.r);
+  Panel sv = singular_value_panel(res.singular_values, res.order, "singular values of step 1c (" + at_r + ")",
+                                  "order n = " + std::to_string(res.order), std::sqrt(2 * res.noise_edge),
+                                  "order threshold #gs#u2#d = 2 × noise edge (Marchenko-Pastur)");
+  phase.legend = LegendAt::BottomLeft;
+  f.panels = {mag, phase, resid, sv, pole_zero_panel(res.model)};
   return f;
 }
 
@@ -448,9 +559,12 @@ Figure gap_figure(const GapReport& r, int periods) {
   Panel t;
   t.title = "normalised residual per excited line: t(k) ~ F(2, 2M-2) under a right model, M = " +
             std::to_string(periods);
-  t.x = axis("frequency (Hz; cycles/sample when T#ds#u = 1)", false);
+  // Log frequency when the lines span two decades or more (review finding 47:
+  // a circuit's action squeezed into 0-200 Hz of 1250); two decades of
+  // headroom give the legend an empty corner.
+  t.x = axis("frequency (Hz; cycles/sample when T#ds#u = 1)", x0 > 0 && x1 >= 100 * x0);
   t.y = axis("t(k) = M |Ē(k)|² / s²(k)", true);
-  t.y.headroom = 3;  // decades: the legend sits above the data
+  t.y.headroom = 2;
   for (size_t i = 0; i < r.steps.size(); ++i) {
     Series s;
     s.label = r.steps[i].first == "model" ? "model as given (gap " + num(r.gap_before) + ")" : r.steps[i].first;
@@ -464,7 +578,9 @@ Figure gap_figure(const GapReport& r, int periods) {
   // Per-line critical value of F(2, d), d = 2M − 2: the survival function is
   // (1 + 2x/d)^(−d/2) in closed form, so x_α = (d/2)(α^(−2/d) − 1).
   const double dof = 2.0 * periods - 2, a = r.options.alpha;
-  t.series.push_back(hline("1 - " + num(a) + " quantile of F(2, 2M-2)", x0, x1, dof / 2 * (std::pow(a, -2 / dof) - 1), Red));
+  t.series.push_back(hline(num(100 * (1 - a)) + " % quantile of F(2, 2M-2) (the " + num(100 * a) +
+                               " % critical value of one line)",
+                           x0, x1, dof / 2 * (std::pow(a, -2 / dof) - 1), Red));
   for (const auto& b : r.bands) t.bands.push_back({b[0], b[1], ShadeRed});
   t.band_label = "flagged (Benjamini-Hochberg, FDR " + num(r.options.fdr) + ")";
   t.legend = LegendAt::TopRight;
