@@ -25,6 +25,7 @@ int run(const CheckCommand& c) {
                   "or --data RECORDS.csv --meta META.json (Pintelon 2002)");
     if (!q.selection.empty())
       throw Error(ErrorKind::Input, "--input/--output/--skip-periods", "apply to periodic records (--data with --meta)");
+    require_frequency_units(q.units, Domain::Discrete, false);
     if (q.r > 0 || !q.method.empty() || q.omega_scale > 0)
       throw Error(ErrorKind::Input, q.r > 0 ? "--r" : !q.method.empty() ? "--method" : "--omega-scale",
                   "applies to FRF and record candidates (--frf, or --data with --meta); a spectral factor's p and "
@@ -49,6 +50,7 @@ void register_check(CLI::App& app, Action& chosen) {
   meta->needs(data);
   add_json_option(chk, c->json_path, "write the comparison here (- = stdout)");
   add_record_selection_options(chk, q.selection);
+  add_frequency_unit_options(chk, q.units);
   chk->add_option("--tolerance", q.tolerance, "relative tolerance (default: derived, see README)");
   chk->add_option("--r", q.r, "FRF/records: r of the candidate when its JSON has none (default: V_SUB selection)")
       ->check(CLI::Range(2, 100000));

@@ -1,6 +1,7 @@
 #include "common.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -145,6 +146,27 @@ void add_record_selection_options(CLI::App* sub, RecordSelection& selection) {
                   "records: drop this many leading periods (a transient); the meta's periods are reduced by it")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+}
+
+void add_frequency_unit_options(CLI::App* sub, FrequencyUnits& units) {
+  sub->add_option("--frequency-unit", units.hz,
+                  "unit of the FRF file's omega column: rad (default; rad/sample, or rad/s with --sample-time or "
+                  "--domain continuous) or hz (cycles/sample, or Hz with --sample-time or --domain continuous)")
+      ->transform(choice(std::map<std::string, bool>{{"rad", false}, {"hz", true}}, "is neither rad nor hz"))
+      ->type_name("UNIT");
+  sub->add_option("--sample-time", units.sample_time_text,
+                  "discrete time: the FRF's omega column is per second and Ts (s) the sample time (omega x Ts in "
+                  "rad/sample; the model carries Ts); default: the column is per sample")
+      ->check(CLI::Validator(
+          [&units](std::string& s) -> std::string {
+            char* end = nullptr;
+            const double v = std::strtod(s.c_str(), &end);
+            if (end == s.c_str() || *end != '\0' || !(v > 0) || !std::isfinite(v))
+              return "\"" + s + "\" is not a positive number of seconds";
+            units.sample_time = v;
+            return {};
+          },
+          "Ts"));
 }
 
 void add_strict_option(CLI::App* sub, bool& strict) {

@@ -92,6 +92,9 @@ CLI::Option* add_plot_option(CLI::App* sub, std::string& path);
 /// name) and --skip-periods K (leading periods dropped), for commands that
 /// read periodic records (fdsid::RecordSelection).
 void add_record_selection_options(CLI::App* sub, RecordSelection& selection);
+/// --frequency-unit rad|hz and --sample-time Ts: how an FRF file's omega
+/// column is read (fdsid::FrequencyUnits; review findings 11 and 36).
+void add_frequency_unit_options(CLI::App* sub, FrequencyUnits& units);
 /// --strict: an estimate unusable in double precision (fdsid::usable_precision
 /// false) exits 1 and writes nothing (review finding 38).
 void add_strict_option(CLI::App* sub, bool& strict);

@@ -168,10 +168,10 @@ void register_gap_validate(CLI::App& app, Action& chosen) {
   GapValidationOptions& o = c->options;
   auto* gval = app.add_subcommand("gap-validate", "blind validation of gap on generated cases (effects withheld)");
   gval->add_option("--cases", o.cases, "number of cases (default 100)")->check(CLI::Range(1, 100000));
-  gval->add_option("--seed", o.seed, "random seed");
+  gval->add_option("--seed", o.seed, "random seed")->capture_default_str();
   gval->add_option("--period", o.period, "samples per period P (default 1024)")->check(CLI::Range(32, 1 << 20));
   gval->add_option("--periods", o.periods, "periods M (default 8)")->check(CLI::Range(4, 1000));
-  gval->add_option("--threads", o.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
+  gval->add_option("--threads", o.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
   gval->add_option("--workdir", o.workdir, "write the cases' files here (default: a temporary directory)");
   gval->add_flag("--keep-files", o.keep_files, "keep each case's model.json, data.csv, meta.json");
   add_json_option(gval, c->json_path, "write the scores here (- = stdout)");

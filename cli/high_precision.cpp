@@ -256,6 +256,18 @@ json frf_high_json(const reference::FrfResult& res, const FrfHighRequest& q, con
   return j;
 }
 
+// An FRF file read exactly, its omega column taken to rad/sample (discrete)
+// or rad/s (continuous) as identify-frf's --frequency-unit/--sample-time say
+// (FrequencyUnits::factor in 50 digits: 2π and the sample time's own text).
+reference::FrfData reference_frf_file(const FrfHighRequest& q, const std::string& domain) {
+  reference::FrfData data = reference::read_frf_csv(q.frf_path, domain);
+  reference::Real factor = 1;
+  if (q.units.hz) factor *= boost::multiprecision::atan(reference::Real(1)) * 8;
+  if (!q.continuous && q.units.sample_time > 0) factor *= reference::parse_decimal(q.units.sample_time_text);
+  for (reference::Real& w : data.omega) w *= factor;
+  return data;
+}
+
 reference::FrfResult reference_frf(const FrfHighRequest& q, const reference::Real& perturbation, unsigned seed) {
   const std::string domain = q.continuous ? "continuous" : "discrete";
   const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
@@ -270,7 +282,7 @@ reference::FrfResult reference_frf(const FrfHighRequest& q, const reference::Rea
     o.backward_perturbation = perturbation;
     o.perturbation_seed = seed;
     if (!q.frf_path.empty()) {
-      res = reference::identify_frf(reference::read_frf_csv(q.frf_path, domain), o);
+      res = reference::identify_frf(reference_frf_file(q, domain), o);
     } else {
       const reference::SampleStatistics stats = records_high(q, domain, sample_time);
       // Section 5 as identify-frf applies it (workflow.hpp, identify_frf_records).
@@ -300,6 +312,8 @@ reference::FrfResult reference_frf(const FrfHighRequest& q, const reference::Rea
     throw Error(ErrorKind::Input, where, e.what());
   }
   if (!q.data_path.empty() && !q.continuous) res.model.sample_time = sample_time;
+  if (!q.frf_path.empty() && !q.continuous && q.units.sample_time > 0)
+    res.model.sample_time = reference::parse_decimal(q.units.sample_time_text);
   return res;
 }
 
@@ -418,6 +432,10 @@ RecordSettings record_settings(const json& cj, const FrfCheckRequest& q) {
     return s;
   }
   const json& src = cj["source"];
+  if (src.contains("noise_std"))
+    throw Error(ErrorKind::Input, q.model_path + " field \"source\"",
+                "the candidate was identified with a known noise level (--noise-std); the reference repeats "
+                "identifications from the sample variance of M >= 4 periods only");
   read_selection(src, q, s);
   const json* treated = src.contains("errors_in_variables") ? &src["errors_in_variables"]
                         : src.contains("improper")          ? &src["improper"]
@@ -450,13 +468,41 @@ struct CandidateSettings {
   int r = 0;          ///< 0 until chosen
   double ws = 0;      ///< ω_s; 0 until the data give the default
   RecordSettings rec;
+  FrequencyUnits units;  ///< FRF file: as the candidate's "source" or the options say
   std::string note;   ///< what was not read from the candidate, "; "-separated
 };
+
+// The FRF file's frequency unit and sample time (identify-frf writes them
+// into "source" when not the default): taken when the options give none; a
+// command line that gives others contradicts the candidate (exit 2).
+FrequencyUnits frf_units(const json& cj, const FrfCheckRequest& q) {
+  FrequencyUnits from_json;
+  if (cj.contains("source") && cj["source"].is_object()) {
+    const json& src = cj["source"];
+    try {
+      if (src.contains("frequency_unit")) from_json.hz = src["frequency_unit"].get<std::string>() == "hz";
+      if (src.contains("sample_time")) {
+        from_json.sample_time_text = src["sample_time"].get<std::string>();
+        from_json.sample_time = std::stod(from_json.sample_time_text);
+      }
+    } catch (const std::exception&) {
+      throw Error(ErrorKind::Input, q.model_path + " field \"source\"",
+                  "frequency_unit must be \"hz\" or \"rad\" and sample_time a decimal string of seconds");
+    }
+  }
+  if (q.units.is_default()) return from_json;
+  if (!from_json.is_default() && (from_json.hz != q.units.hz || from_json.sample_time != q.units.sample_time))
+    throw Error(ErrorKind::Input, "--frequency-unit/--sample-time",
+                "contradict the candidate's \"source\"; drop the options: check repeats what the candidate JSON says it did");
+  return q.units;
+}
 
 CandidateSettings candidate_settings(const json& cj, const FrfCheckRequest& q, const StateSpace& candidate) {
   CandidateSettings c;
   c.rec = record_settings(cj, q);
   c.domain = candidate.domain;
+  c.units = frf_units(cj, q);
+  require_frequency_units(c.units, c.domain, !q.frf_path.empty());
   const std::string jm = candidate_method(cj, q.model_path);
   if (c.domain == Domain::Discrete && (jm == "bilinear" || jm == "orthogonal"))
     throw Error(ErrorKind::Input, q.model_path, "a discrete-time model with a continuous-time method \"" + jm + "\"");
@@ -488,7 +534,7 @@ FrfData data_and_settings(const FrfCheckRequest& q, const StateSpace& candidate,
   FrfData data;
   SampleStatistics stats;
   if (from_frf) {
-    data = read_frf_csv(q.frf_path, c.domain);
+    data = read_frf_csv(q.frf_path, c.domain, c.units);
   } else {
     const Records rec = read_records(q.data_path, q.meta_path, c.rec.selection);
     const RecordMeta& meta = rec.meta;
@@ -561,6 +607,7 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
 
   FrfHighRequest hq;
   hq.frf_path = q.frf_path;
+  hq.units = c.units;
   hq.data_path = q.data_path;
   hq.meta_path = q.meta_path;
   hq.continuous = c.domain == Domain::Continuous;

@@ -39,6 +39,7 @@ struct FrfCheckRequest {
   bool eiv = false, improper = false, eiv_model_variance = false;
   double min_input_snr = 0;  ///< 0: from the JSON, else 10 (identify-frf's default)
   RecordSelection selection;  ///< records: columns by name, skipped periods (as the candidate's identification read them)
+  FrequencyUnits units;       ///< FRF file: its omega column's unit (when the candidate's "source" names none)
 };
 
 /// Identify with the reference at the candidate's settings and compare G on
@@ -54,6 +55,7 @@ int sample_spectrum_high(const std::string& model_path, int M, const std::string
 /// (chosen by the double-precision selection when the user gave none).
 struct FrfHighRequest {
   std::string frf_path;              ///< FRF CSV, or empty
+  FrequencyUnits units;              ///< how the FRF CSV's omega column is read
   std::string data_path, meta_path;  ///< periodic records + meta, or empty
   bool continuous = false;
   bool orthogonal = false;

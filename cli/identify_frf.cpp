@@ -25,6 +25,8 @@ struct IdentifyFrfCommand {
   double min_input_snr = 10;
   bool eiv = false, improper = false, strict = false;
   RecordSelection selection;
+  FrequencyUnits units;  ///< --frequency-unit, --sample-time (FRF files)
+  std::vector<double> noise_std;  ///< --noise-std: known output noise (records), else the sample variance
 };
 
 // --precision high: the reference identifies for a given order and r; the
@@ -38,6 +40,7 @@ int run_high(const IdentifyFrfCommand& c, const FrfData& data, const SampleStati
   q.eiv_variance = source.eiv_variance;
   q.min_input_snr = source.min_input_snr;
   q.frf_path = c.frf_path;
+  q.units = c.units;
   q.data_path = c.data_path;
   q.meta_path = c.meta_path;
   q.selection = c.selection;
@@ -79,6 +82,7 @@ int run(const IdentifyFrfCommand& c) {
     throw Error(ErrorKind::Input, "identify-frf", "give either --frf FILE or --data FILE --meta FILE");
   if (from_frf && !c.selection.empty())
     throw Error(ErrorKind::Input, "--input/--output/--skip-periods", "apply to periodic records (--data --meta), not to --frf");
+  require_frequency_units(c.units, c.domain, from_frf);
   if (c.options.r < 0 || c.options.r_max < 0) throw Error(ErrorKind::Input, "--r", "must be positive");
   refuse_overwrite(c.plot_path, {c.frf_path, c.data_path, c.meta_path, c.json_path}, "--plot");
   refuse_overwrite(c.json_path, {c.frf_path, c.data_path, c.meta_path}, "--json");
@@ -91,19 +95,25 @@ int run(const IdentifyFrfCommand& c) {
   SampleStatistics stats;
   FrfData data;
   if (from_frf) {
-    data = read_frf_csv(c.frf_path, c.domain);
+    data = read_frf_csv(c.frf_path, c.domain, c.units);
     source.frf_path = c.frf_path;
+    source.units = c.units;
     source.known_variance = data.has_noise_model;
   } else {
     const Records rec = read_records(c.data_path, c.meta_path, c.selection);
     const RecordMeta& meta = rec.meta;
-    require_sample_subspace_periods(meta, c.meta_path);
+    if (c.noise_std.empty()) require_sample_subspace_periods(meta, c.meta_path);
     try {
-      stats = record_statistics(rec.samples, rec.inputs, meta, c.domain);
+      if (c.noise_std.empty()) {
+        stats = record_statistics(rec.samples, rec.inputs, meta, c.domain);
+        data = stats.data;
+      } else {
+        data = record_known_noise(rec.samples, rec.inputs, meta, c.domain, c.noise_std);
+      }
     } catch (const Error& e) {
       throw e.within(c.data_path + " with " + c.meta_path);
     }
-    data = stats.data;
+    source.noise_std = c.noise_std;
     source.data_path = c.data_path;
     source.meta_path = c.meta_path;
     source.periods = meta.periods;
@@ -114,12 +124,18 @@ int run(const IdentifyFrfCommand& c) {
     source.eiv_variance = c.eiv_variance;
     source.min_input_snr = c.min_input_snr;
   }
-  if (c.precision == Precision::High) return run_high(c, data, stats, source, where);
+  if (c.precision == Precision::High) {
+    if (!c.noise_std.empty())
+      throw Error(ErrorKind::Input, "--noise-std",
+                  "the 50-digit reference reads records with their sample variance only; drop --precision high "
+                  "(or give M >= 4 periods without --noise-std)");
+    return run_high(c, data, stats, source, where);
+  }
 
   const std::string method = frf_method_name(c.domain, c.method);
   FrfResult res;
   try {
-    if (from_frf) {
+    if (from_frf || !c.noise_std.empty()) {
       res = identify_frf(data, o);
     } else {
       FrfRun run = identify_frf_records(stats, o, source.treatment, c.eiv_variance, c.min_input_snr);
@@ -170,11 +186,12 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
   add_plot_option(idf, c->plot_path);
   add_strict_option(idf, c->strict);
   add_record_selection_options(idf, c->selection);
-  idf->add_option("--order", o.order, "model order n_a, or auto (from the singular values of step 1c)")
+  add_frequency_unit_options(idf, c->units);
+  idf->add_option("--order", o.order, "model order n_a, or auto (the default: from the singular values of step 1c, Pintelon 2002 Section 5)")
       ->transform(order_value());
   idf->add_option("--max-order", o.max_order, "largest order --order auto considers (default min(20, r p - 1))")
       ->check(CLI::Range(1, 1000));
-  idf->add_option("--r", o.r, "r > n_a (default: minimise V_SUB, Eq. 35, over [1.5 n_a, 6 n_a])");
+  idf->add_option("--r", o.r, "number of basis functions r > n_a (default: the r in [1.5 n_a, 6 n_a] that minimises the weighted fit V_SUB, Eq. 35)");
   idf->add_option("--r-max", o.r_max, "upper end of the r search (default 6 n_a)");
   idf->add_option("--domain", c->domain, "discrete (omega in rad/sample, default) or continuous (rad/s)")
       ->transform(choice(std::map<std::string, Domain>{{"discrete", Domain::Discrete},
@@ -191,7 +208,7 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
                             "noisy input: identify from G = Y/U with the variance of Eq. (31) (Section 5; needs "
                             "--data, --meta: the input noise is estimated over the periods)");
   auto* eiv_variance = idf->add_option("--eiv-variance", c->eiv_variance,
-                  "data (Eq. 31 from the noisy ratio) or model (re-evaluated at a first-pass model: consistent)")
+                  "data (the default: Eq. 31 from the noisy ratio) or model (re-evaluated at a first-pass model: consistent)")
       ->transform(choice(std::map<std::string, EivVariance>{{"data", EivVariance::Data}, {"model", EivVariance::Model}},
                          "is not data or model"));
   auto* improper =
@@ -202,6 +219,11 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
   eiv_variance->needs(eiv);  // review finding 49: it was ignored without --eiv
   improper->needs(data);
   idf->add_option("--min-input-snr", c->min_input_snr, "drop lines whose input SNR is below this (default 10)");
+  auto* noise = idf->add_option("--noise-std", c->noise_std,
+                                "records: the known std of the white output noise per sample (one value, or one per "
+                                "output); the variance then comes from it, not from the periods, so M >= 1 period "
+                                "suffices (default: the sample variance over M >= 4 periods)");
+  noise->needs(data)->excludes(eiv)->excludes(improper);
   on_parsed(idf, c, chosen, run);
 }
 

@@ -115,7 +115,7 @@ void register_records(CLI::App& app, Action& chosen) {
       ->required();
   val->add_option("--data", v->data_path, "periodic records CSV")->required();
   val->add_option("--meta", v->meta_path, "meta JSON of the records")->required();
-  val->add_option("--min-fit", v->min_fit, "exit 1 when an output's fit is below this many percent");
+  val->add_option("--min-fit", v->min_fit, "exit 1 when an output's fit is below this many percent (default: no threshold)");
   add_json_option(val, v->json_path, "write the fit here (- = stdout)");
   add_record_selection_options(val, v->selection);
   on_parsed(val, v, chosen, run_validate);

@@ -108,9 +108,9 @@ void register_table2(CLI::App* reproduce, Action& chosen) {
   auto* t2 = reproduce->add_subcommand("table2", "Akcay (2011) Table 2 (Monte Carlo)");
   add_json_option(t2, c->json_path, "write the JSON result here (- = stdout)");
   add_plot_option(t2, c->plot_path);
-  t2->add_option("--realizations", o.realizations, "noise realisations (paper: 100)")->check(CLI::Range(1, 1000000));
-  t2->add_option("--seed", o.seed, "random seed");
-  t2->add_option("--threads", o.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
+  t2->add_option("--realizations", o.realizations, "noise realisations (paper: 100)")->check(CLI::Range(1, 1000000))->capture_default_str();
+  t2->add_option("--seed", o.seed, "random seed")->capture_default_str();
+  t2->add_option("--threads", o.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
   t2->add_option("--extension", o.extension, "step 1 reading: conjugate (default: reproduces the paper) or hermitian-part")
       ->transform(choice(std::map<std::string, Extension>{{"hermitian-part", Extension::HermitianPart},
                                                           {"conjugate", Extension::Conjugate}},
@@ -119,7 +119,7 @@ void register_table2(CLI::App* reproduce, Action& chosen) {
       ->transform(choice(std::map<std::string, NoiseVariance>{{"unit-complex", NoiseVariance::UnitComplex},
                                                               {"unit-per-component", NoiseVariance::UnitPerComponent}},
                          "is not unit-complex or unit-per-component"));
-  t2->add_option("--vo-epsilon", o.vo_epsilon, "noise level of the vo1997 runs (paper: 1e-9; 0 skips them)");
+  t2->add_option("--vo-epsilon", o.vo_epsilon, "noise level of the vo1997 runs (paper: 1e-9; 0 skips them)")->capture_default_str();
   t2->add_option("--M", o.Ms, "data lengths (default 1000 2000 4000 8000 16000 32000)")->check(CLI::Range(1, 10000000));
   on_parsed(t2, c, chosen, run_table2);
 }
@@ -134,14 +134,14 @@ void register_figure(CLI::App* reproduce, Action& chosen, int figure) {
                                                   : "Pintelon (2002) Fig. 2: std ratio with model errors (n_a = 1)");
   add_json_option(f, c->json_path, "write the JSON result here (- = stdout)");
   add_plot_option(f, c->plot_path);
-  f->add_option("--runs", o.runs, "Monte Carlo runs N_r (paper: 10000)")->check(CLI::Range(2, 10000000));
-  f->add_option("--seed", o.seed, "random seed");
-  f->add_option("--threads", o.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024));
+  f->add_option("--runs", o.runs, "Monte Carlo runs N_r (paper: 10000)")->check(CLI::Range(2, 10000000))->capture_default_str();
+  f->add_option("--seed", o.seed, "random seed")->capture_default_str();
+  f->add_option("--threads", o.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
   f->add_option("--input-level", o.input_level,
                 "|U(k)| (default 1; sqrt(2000)/2 = 22.36 is a unit sine under Eq. 4's DFT scaling)");
-  f->add_option("--M", o.M, "experiments per run (paper: 7)")->check(CLI::Range(4, 10000));
-  f->add_option("--r", o.r, "r of Algorithm 1 (paper: 8)")->check(CLI::Range(2, 200));
-  f->add_option("--F", o.F, "frequencies k/2000, k = 1..F (paper: 999)")->check(CLI::Range(2, 999));
+  f->add_option("--M", o.M, "experiments per run (paper: 7)")->check(CLI::Range(4, 10000))->capture_default_str();
+  f->add_option("--r", o.r, "r of Algorithm 1 (paper: 8)")->check(CLI::Range(2, 200))->capture_default_str();
+  f->add_option("--F", o.F, "frequencies k/2000, k = 1..F (paper: 999)")->check(CLI::Range(2, 999))->capture_default_str();
   on_parsed(f, c, chosen, run_figure);
 }
 

@@ -81,9 +81,9 @@ void register_sample_spectrum(CLI::App& app, Action& chosen) {
   auto* smp = app.add_subcommand("sample-spectrum", "sample a model's power spectrum on the uniform grid into CSV");
   smp->add_option("--model", c->model_path, "model JSON")->required();
   smp->add_option("--M", c->M, "grid: M+1 samples from 0 to pi")->required();
-  smp->add_option("--epsilon", c->epsilon, "add Akcay (2011) Section 4 noise of this level");
-  smp->add_option("--seed", c->seed, "random seed of the noise");
-  smp->add_option("--out", c->out_path, "CSV output (- = stdout)")->check(output_path("--out"));
+  smp->add_option("--epsilon", c->epsilon, "add Akcay (2011) Section 4 noise of this level (default 0: none)");
+  smp->add_option("--seed", c->seed, "random seed of the noise")->capture_default_str();
+  smp->add_option("--out", c->out_path, "CSV output (- = stdout, the default)")->check(output_path("--out"));
   add_json_option(smp, c->json_path, "write what was sampled here (- = stdout, with --out FILE)");
   smp->add_option("--precision", c->precision, "double (default) or high (50-digit reference, 40 digits written)")
       ->transform(choice(kPrecisions, "is not double or high"));

@@ -48,3 +48,13 @@ target_link_libraries(cli_conformance_test PRIVATE GTest::gtest_main nlohmann_js
 target_compile_definitions(cli_conformance_test PRIVATE FDSID_EXE="$<TARGET_FILE:fdsid>" FDSID_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
 add_dependencies(cli_conformance_test fdsid)
 fdsid_discover_tests(cli_conformance_test LABELS cli unit quick WORKING_DIRECTORY ${PROJECT_BINARY_DIR})
+
+# README.md's examples (review finding 24: its outputs went stale): every
+# transcript block runs in a scratch folder and must print what the README
+# shows (scripts/readme-examples.py). Release suite only (label docs): the
+# examples include Monte Carlo reproductions.
+find_program(FDSID_PYTHON3 python3 REQUIRED)
+add_test(NAME ReadmeExamples
+  COMMAND ${FDSID_PYTHON3} ${PROJECT_SOURCE_DIR}/scripts/readme-examples.py $<TARGET_FILE:fdsid>
+          ${PROJECT_SOURCE_DIR}/README.md)
+set_tests_properties(ReadmeExamples PROPERTIES LABELS "docs;cli" TIMEOUT 900)

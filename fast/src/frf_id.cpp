@@ -678,6 +678,10 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
   res.poles = poles(est);
   const std::string unstable = instability_warning(est.domain, res.poles);
   if (!unstable.empty()) res.warnings.push_back(unstable);
+  const double lo = d.omega.minCoeff(), hi = d.omega.maxCoeff();
+  const std::string outside =
+      out_of_band_warning(resonances_outside_band(res.poles, est.domain, lo, hi), est.domain, lo, hi, "the data's frequencies");
+  if (!outside.empty()) res.warnings.push_back(outside);
   return res;
 }
 
@@ -921,11 +925,10 @@ int repeated_line(const std::vector<int>& lines) {
   return -1;
 }
 
-SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta,
-                                   Domain domain) {
-  if (meta.periods < 2)
-    fail(ErrorKind::Input, "meta field \"periods\"",
-         "M = " + std::to_string(meta.periods) + ": the sample variance needs at least 2 periods");
+namespace {
+
+// What both record readers check: lines, sample time, channels, input power.
+void check_records(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta) {
   if (meta.excited_lines.empty()) fail(ErrorKind::Input, "meta field \"excited_lines\"", "no excited lines");
   if (const int k = repeated_line(meta.excited_lines); k >= 0)
     fail(ErrorKind::Input, "meta field \"excited_lines\"", "line " + std::to_string(k) + " is listed twice");
@@ -934,11 +937,29 @@ SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, c
   if (inputs < 1 || inputs >= samples.cols())
     fail(ErrorKind::Input, "data", "needs at least one input and one output column");
   require_input_power(samples, inputs, meta);
-  const auto spectra = period_spectra(samples, meta.period, meta.periods, meta.excited_lines);
+}
+
+// ω_k = 2πk/P (discrete, rad/sample) or 2πk/(P Ts) (continuous, rad/s).
+Eigen::VectorXd line_frequencies(const RecordMeta& meta, Domain domain) {
   const int F = static_cast<int>(meta.excited_lines.size());
   Eigen::VectorXd omega(F);
   for (int k = 0; k < F; ++k)
     omega(k) = 2 * M_PI * meta.excited_lines[k] / meta.period / (domain == Domain::Continuous ? meta.sample_time : 1.0);
+  return omega;
+}
+
+}  // namespace
+
+SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta,
+                                   Domain domain) {
+  if (meta.periods < 2)
+    fail(ErrorKind::Input, "meta field \"periods\"",
+         "M = " + std::to_string(meta.periods) +
+             ": the sample variance needs at least 2 periods (a known noise level: identify-frf --noise-std)");
+  check_records(samples, inputs, meta);
+  const auto spectra = period_spectra(samples, meta.period, meta.periods, meta.excited_lines);
+  const int F = static_cast<int>(meta.excited_lines.size());
+  const Eigen::VectorXd omega = line_frequencies(meta, domain);
   std::vector<std::vector<Eigen::VectorXcd>> U_l(meta.periods), Y_l(meta.periods);
   const int outputs = static_cast<int>(samples.cols()) - inputs;
   for (int l = 0; l < meta.periods; ++l)
@@ -955,6 +976,43 @@ SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, c
              "output " + std::to_string(a + 1) +
                  " has zero sample variance over the periods (noise-free or repeated records): no noise model");
   return st;
+}
+
+FrfData record_known_noise(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta, Domain domain,
+                           const std::vector<double>& noise_std) {
+  if (meta.periods < 1)
+    fail(ErrorKind::Input, "meta field \"periods\"", "M = " + std::to_string(meta.periods) + ": no period");
+  check_records(samples, inputs, meta);
+  const int outputs = static_cast<int>(samples.cols()) - inputs;
+  if (noise_std.size() != 1 && static_cast<int>(noise_std.size()) != outputs)
+    fail(ErrorKind::Input, "--noise-std",
+         "give one noise std for every output, or one per output (" + std::to_string(outputs) + "), not " +
+             std::to_string(noise_std.size()));
+  for (double s : noise_std)
+    if (!(s > 0) || !std::isfinite(s))
+      fail(ErrorKind::Input, "--noise-std", "must be positive and finite, got " + fmt(s, 6));
+  const auto spectra = period_spectra(samples, meta.period, meta.periods, meta.excited_lines);
+  const int F = static_cast<int>(meta.excited_lines.size());
+  FrfData d;
+  d.domain = domain;
+  d.sample_time = meta.sample_time;
+  d.omega = line_frequencies(meta, domain);
+  for (int k = 0; k < F; ++k) {
+    Eigen::VectorXcd mean = Eigen::VectorXcd::Zero(samples.cols());
+    for (int l = 0; l < meta.periods; ++l) mean += spectra[l][k];
+    mean /= meta.periods;
+    d.U.push_back(mean.head(inputs));
+    d.Y.push_back(mean.tail(outputs));
+    // Eq. (4)'s 1/√P keeps white noise's E|V(k)|² = σ²; the mean of M periods: σ²/M.
+    Eigen::MatrixXd var(outputs, 1);
+    for (int a = 0; a < outputs; ++a) {
+      const double s = noise_std.size() == 1 ? noise_std[0] : noise_std[static_cast<size_t>(a)];
+      var(a, 0) = s * s / meta.periods;
+    }
+    d.variance.push_back(var);
+  }
+  d.has_noise_model = true;
+  return d;
 }
 
 namespace {

@@ -404,7 +404,10 @@ void write_spectrum_csv(std::ostream& out, const SpectrumData& d) {
   }
 }
 
-FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain) {
+namespace {
+
+FrfData parse_frf(std::istream& in, const std::string& name, Domain domain, const FrequencyUnits& units) {
+  const double factor = units.factor(domain);
   const CsvHeader csv = read_csv_header(in, name, "omega,G_re,G_im[,G_var]");
   const auto& header = csv.cells;
   const bool has_var = header.size() == 4;
@@ -416,14 +419,22 @@ FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain) 
   std::vector<Eigen::MatrixXd> var;
   std::map<double, std::string> seen;  // omega -> its line, for a repeated frequency
   for_each_csv_row(in, name, csv, [&](const std::vector<std::string>& cells, const std::string& where) {
-    const double w = parse_cell(cells[0], where + " column omega");
+    const double column = parse_cell(cells[0], where + " column omega");
+    const double w = column * factor;
     // Checked here, where the file line is known (review finding 21: the
     // library's check said "frequency 201 ... (data row k is file line k + 1)").
-    if (domain == Domain::Discrete && (w < 0 || w > M_PI))
-      input_error(where + " column omega", "omega = " + fmt(w, 6) +
-                                               " rad/sample is outside [0, pi] (rad/s? give --domain continuous)");
+    if (domain == Domain::Discrete && (w < 0 || w > M_PI)) {
+      if (units.is_default())
+        input_error(where + " column omega", "omega = " + fmt(column, 6) +
+                                                 " rad/sample is outside [0, pi] (Hz or rad/s? give --frequency-unit "
+                                                 "and --sample-time, or --domain continuous)");
+      input_error(where + " column omega",
+                  "omega = " + fmt(column, 6) + " " + units.column_unit(domain) + " is " + fmt(w, 6) +
+                      " rad/sample, outside [0, pi] (above the Nyquist frequency: is --sample-time right?)");
+    }
     if (domain == Domain::Continuous && !(w > 0))
-      input_error(where + " column omega", "omega = " + fmt(w, 6) + " rad/s must be positive for continuous time");
+      input_error(where + " column omega", "omega = " + fmt(column, 6) + " " + units.column_unit(domain) +
+                                               " must be positive for continuous time");
     const auto [it, fresh] = seen.emplace(w, where);
     if (!fresh) input_error(where + " column omega", "omega = " + fmt(w, 17) + " repeats " + it->second);
     omega.push_back(w);
@@ -438,16 +449,45 @@ FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain) 
   if (omega.empty()) input_error(name, "no data rows");
   FrfData d = frf_data(domain, Eigen::Map<Eigen::VectorXd>(omega.data(), static_cast<Eigen::Index>(omega.size())), G,
                        var);
+  if (domain == Domain::Discrete && units.sample_time > 0) d.sample_time = units.sample_time;
   validate(d, name);
   return d;
 }
 
-FrfData read_frf_csv(const std::string& path, Domain domain) {
+}  // namespace
+
+double FrequencyUnits::factor(Domain domain) const {
+  return (hz ? 2 * M_PI : 1.0) * (domain == Domain::Discrete && sample_time > 0 ? sample_time : 1.0);
+}
+
+std::string FrequencyUnits::column_unit(Domain domain) const {
+  const bool per_second = domain == Domain::Continuous || sample_time > 0;
+  return hz ? (per_second ? "Hz" : "cycles/sample") : (per_second ? "rad/s" : "rad/sample");
+}
+
+void require_frequency_units(const FrequencyUnits& units, Domain domain, bool from_frf) {
+  if (units.is_default()) return;
+  if (!from_frf)
+    input_error("--frequency-unit/--sample-time",
+                "apply to an FRF file (--frf); records carry their sample time in the meta");
+  if (domain == Domain::Continuous && units.sample_time > 0)
+    input_error("--sample-time",
+                "applies to discrete-time FRFs; a continuous-time omega is already per second (drop it, or use "
+                "--frequency-unit hz for Hz)");
+}
+
+FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain) {
+  return parse_frf(in, name, domain, FrequencyUnits{});
+}
+
+FrfData read_frf_csv(const std::string& path, Domain domain, const FrequencyUnits& units) {
   check_readable_file(path, "FRF file");
   std::ifstream f(path);
   if (!f) input_error(path, std::string("cannot open FRF file (") + std::strerror(errno) + ")");
-  return parse_frf_csv(f, path, domain);
+  return parse_frf(f, path, domain, units);
 }
+
+FrfData read_frf_csv(const std::string& path, Domain domain) { return read_frf_csv(path, domain, FrequencyUnits{}); }
 
 Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int& inputs) {
   const CsvHeader csv = read_csv_header(in, name, "u,y or u1,...,y1,...");

@@ -26,12 +26,16 @@ json to_json(const FrfSource& s) {
   json j;
   if (!s.frf_path.empty()) {
     j = {{"frf", s.frf_path}, {"variance", s.known_variance ? "G_var column (known)" : "none (unit weights)"}};
+    if (s.units.hz) j["frequency_unit"] = "hz";
+    if (s.units.sample_time > 0) j["sample_time"] = s.units.sample_time_text;
     return j;
   }
   j = {{"data", s.data_path},
        {"meta", s.meta_path},
        {"periods", s.periods},
-       {"variance", "sample variance over the periods / M (Pintelon 2002 Eq. 25)"}};
+       {"variance", s.noise_std.empty() ? "sample variance over the periods / M (Pintelon 2002 Eq. 25)"
+                                        : "known: the output noise std per sample (--noise-std), squared / M"}};
+  if (!s.noise_std.empty()) j["noise_std"] = s.noise_std;
   if (!s.selection.inputs.empty()) {
     j["input_columns"] = s.selection.inputs;
     j["output_columns"] = s.selection.outputs;

@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "fdsid/error.hpp"
+#include "fdsid/format.hpp"
 #include "numerics/lyapunov.hpp"
 
 namespace fdsid {
@@ -147,6 +148,35 @@ StateSpace refer_realization(const StateSpace& est, const StateSpace& ref, int r
   out.B = Tlu.solve(est.B);
   out.C = est.C * T;
   return out;
+}
+
+std::vector<OutOfBandResonance> resonances_outside_band(const Eigen::VectorXcd& poles, Domain domain, double lo,
+                                                        double hi) {
+  std::vector<OutOfBandResonance> found;
+  for (Eigen::Index i = 0; i < poles.size(); ++i) {
+    const cplx p = poles(i);
+    if (!(p.imag() > 0)) continue;  // one pole per pair; real poles have no resonance
+    const cplx s = domain == Domain::Discrete ? std::log(p) : p;
+    const double sigma = std::abs(s.real()), wd = s.imag();
+    if (!(sigma < wd)) continue;  // ζ ≥ 1/√2: no resonance peak
+    const bool above = wd - sigma > hi, below = wd + sigma < lo;
+    if (above || below) found.push_back({p, wd, -s.real() / std::abs(s), above});
+  }
+  return found;
+}
+
+std::string out_of_band_warning(const std::vector<OutOfBandResonance>& found, Domain domain, double lo, double hi,
+                                const std::string& excited) {
+  if (found.empty()) return "";
+  const std::string unit = domain == Domain::Discrete ? " rad/sample" : " rad/s";
+  std::string list;
+  for (const OutOfBandResonance& r : found)
+    list += std::string(list.empty() ? "" : "; ") + "pole pair " + fmt(r.pole.real(), 6) + "±" +
+            fmt(r.pole.imag(), 6) + "j (resonance at " + fmt(r.frequency, 4) + unit + ", damping ratio " +
+            fmt(r.damping, 2) + ", " + (r.above ? "above" : "below") + " the band)";
+  return list + ": outside " + excited + " (" + fmt(lo, 4) + " to " + fmt(hi, 4) + unit +
+         ") by more than its half-power width, so only its tail is in the data and its frequency and damping are "
+         "poorly determined; excite the band where it lies, or read it as a fitting term, not a mode";
 }
 
 }  // namespace fdsid

@@ -15,7 +15,8 @@ void require_sample_subspace_periods(const RecordMeta& meta, const std::string& 
     throw Error(ErrorKind::Input, meta_path + " field \"periods\"",
                 "M = " + std::to_string(meta.periods) +
                     " periods: the sample-subspace estimates of B and D need M >= 4, those of A and C "
-                    "M >= 2 (Pintelon 2002 Theorem 2)");
+                    "M >= 2 (Pintelon 2002 Theorem 2); with a known output noise level give it as --noise-std "
+                    "(identify-frf: any M >= 1)");
 }
 
 FrfRun identify_frf_records(const SampleStatistics& stats, const FrfOptions& o, RecordTreatment treatment,
@@ -156,7 +157,7 @@ FitVerdict fit_verdict(const FrfResult& result, const FrfData& data, const FrfSo
   f.available = data.has_noise_model;
   if (!f.available) return f;
   f.terms = data.frequencies() * data.outputs() * data.columns();
-  f.periods = source.frf_path.empty() ? source.periods : 0;
+  f.periods = source.frf_path.empty() && source.noise_std.empty() ? source.periods : 0;
   double mean = 1, var = 1;  // Exp(1): known variance
   if (f.periods >= 4) {
     const double d = 2.0 * f.periods - 2;

@@ -211,6 +211,17 @@ int repeated_line(const std::vector<int>& lines);
 SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta,
                                    Domain domain);
 
+/// Records with a known output noise level (review finding 33: fewer than 4
+/// periods, even one, as in many real records): Û and Ŷ the means over the
+/// M ≥ 1 periods and the variance of Ŷ from the white output noise's std σ_i
+/// per sample (one for all outputs, or one per output): Eq. (4)'s 1/√P keeps
+/// E|V(k)|² = σ², the mean of M periods σ²/M. The known-variance estimator of
+/// Pintelon (2002) Section 3 (Theorem 1: consistent for any M); the input is
+/// taken as noise-free. Fails: as record_statistics (but M ≥ 1), and a
+/// noise_std list of the wrong length or a value ≤ 0.
+FrfData record_known_noise(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta, Domain domain,
+                           const std::vector<double>& noise_std);
+
 /// Section 5, errors-in-variables (SISO): U = 1, Ĝ = Ŷ/Û and variance σ̂²_G / M.
 /// Eq. (31) as printed divides σ̂_YU by Ŷ Û; the first-order expansion
 /// δG = G (δY/Y − δU/U) gives E[δY conj δU] / (Y conj U), so this uses

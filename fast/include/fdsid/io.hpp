@@ -37,6 +37,34 @@ void write_spectrum_csv(std::ostream& out, const SpectrumData& data);
 FrfData read_frf_csv(const std::string& path, Domain domain);
 FrfData parse_frf_csv(std::istream& in, const std::string& name, Domain domain);
 
+/// How the omega column of an FRF file is read (review findings 11 and 36;
+/// MATLAB's idfrd(..., Ts, 'FrequencyUnit', 'Hz'), python-control's frd in
+/// rad/s): `hz` reads cycles per second (cycles per sample without a sample
+/// time), else radians; a sample time Ts > 0 says the column is per second,
+/// so a discrete-time ω becomes rad/sample by × Ts and the model carries Ts.
+/// The default (rad, no Ts) is the format's own unit: rad/sample (discrete),
+/// rad/s (continuous).
+struct FrequencyUnits {
+  bool hz = false;
+  double sample_time = 0;        ///< Ts in seconds; 0: not given
+  std::string sample_time_text;  ///< Ts as the user wrote it (the reference reads it exactly)
+  bool is_default() const { return !hz && sample_time == 0; }
+  /// The factor that takes the column to rad/sample (discrete) or rad/s
+  /// (continuous): (hz ? 2π : 1) × (discrete and Ts given ? Ts : 1).
+  double factor(Domain domain) const;
+  /// The column's unit in words: "Hz", "rad/s", "cycles/sample", "rad/sample".
+  std::string column_unit(Domain domain) const;
+};
+/// Purpose: an FRF file whose omega column is in `units`; the data's omega in
+/// the format's unit and, with a sample time, data.sample_time = Ts.
+/// Fails: as read_frf_csv; a frequency outside [0, π] rad/sample after the
+/// conversion names the column's value, its unit and the Nyquist frequency.
+FrfData read_frf_csv(const std::string& path, Domain domain, const FrequencyUnits& units);
+/// Refuses units where they mean nothing (Error(Input) naming the option):
+/// for records (`from_frf` false: their meta has Ts) or for spectra, and a
+/// sample time for a continuous-time FRF (its omega is per second already).
+void require_frequency_units(const FrequencyUnits& units, Domain domain, bool from_frf);
+
 /// Periodic input/output records CSV: header u,y or u1,…,uq,y1,…,yp (inputs
 /// first), one row per sample. Returns the samples (rows × (q + p)) and sets
 /// `inputs` = q.

@@ -44,6 +44,29 @@ Eigen::VectorXcd poles(const StateSpace& model);
 /// model is stable when it is < 1.
 double spectral_radius(const StateSpace& model);
 
+/// A lightly damped pole pair whose resonance lies outside a frequency band
+/// (review finding 29: a resonance above the excited lines was identified far
+/// off without a word). Each pair is represented by its pole of positive
+/// imaginary part; discrete poles are read as s = log z (rad/sample).
+/// Criterion: a resonance peak exists (ζ < 1/√2, i.e. |Re s| < |Im s|) and
+/// its half-power band [ω_d − |Re s|, ω_d + |Re s|] (ω_d = Im s) misses
+/// [lo, hi] entirely: only the tail of the mode reaches the band, which fixes
+/// its contribution there but not its frequency and damping separately.
+struct OutOfBandResonance {
+  cplx pole;           ///< the model's pole (z for discrete, s for continuous)
+  double frequency;    ///< ω_d = Im s: rad/sample (discrete) or rad/s (continuous)
+  double damping;      ///< ζ = −Re s / |s|
+  bool above;          ///< above hi (else below lo)
+};
+std::vector<OutOfBandResonance> resonances_outside_band(const Eigen::VectorXcd& poles, Domain domain, double lo,
+                                                        double hi);
+/// The warning for one such pair, "" for none: the pole, its resonance and
+/// damping, the band, what it means and what to do. `excited` names the band
+/// ("the excited lines", "the FRF's frequencies"); frequencies are printed
+/// in the band's unit (rad/sample, or rad/s for continuous time).
+std::string out_of_band_warning(const std::vector<OutOfBandResonance>& found, Domain domain, double lo, double hi,
+                                const std::string& excited);
+
 /// Transmission zeros of a square model: the finite generalised eigenvalues of
 /// the Rosenbrock pencil ([A B; C D], [I 0; 0 0]) by real QZ (Eigen's
 /// GeneralizedEigenSolver); infinite ones are dropped (an infinite eigenvalue

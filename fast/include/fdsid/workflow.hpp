@@ -44,6 +44,7 @@ enum class EivVariance {
 struct FrfSource {
   std::string frf_path;              ///< FRF CSV, or empty
   bool known_variance = false;       ///< the FRF CSV had a G_var column
+  FrequencyUnits units;              ///< how its omega column was read (written when not the default)
   std::string data_path, meta_path;  ///< periodic records + meta, or empty
   int periods = 0;                   ///< M of the records
   RecordTreatment treatment = RecordTreatment::Plain;
@@ -51,6 +52,7 @@ struct FrfSource {
   double min_input_snr = 10;         ///< the line rule of Eq. (34) (ErrorsInVariables, Improper)
   int dropped_lines = 0;             ///< lines dropped by that rule
   RecordSelection selection;         ///< columns by name, skipped periods (written when used)
+  std::vector<double> noise_std;     ///< records: the known output noise std (--noise-std); empty: sample variance
 };
 
 /// V_SUB (Eq. 35) judged against its law under a right model and noise model
