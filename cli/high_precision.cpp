@@ -28,6 +28,9 @@ using nlohmann::json;
 
 double to_double(const json& decimal) { return std::stod(decimal.get<std::string>()); }
 
+// 2π in the reference's precision.
+reference::Real two_pi() { return boost::multiprecision::atan(reference::Real(1)) * 8; }
+
 }  // namespace
 
 reference::Real exact(double x) {
@@ -230,9 +233,9 @@ reference::SampleStatistics records_high(const FrfHighRequest& q, const std::str
     }
   sample_time = exact(meta.sample_time);
   std::vector<reference::Real> omega;
-  const reference::Real two_pi = boost::multiprecision::atan(reference::Real(1)) * 8;
+  const reference::Real w0 = two_pi();
   for (int k : meta.excited_lines)
-    omega.push_back(two_pi * k / meta.period / (q.continuous ? sample_time : reference::Real(1)));
+    omega.push_back(w0 * k / meta.period / (q.continuous ? sample_time : reference::Real(1)));
   return reference::sample_statistics(domain, omega, U_l, Y_l);
 }
 
@@ -262,7 +265,7 @@ json frf_high_json(const reference::FrfResult& res, const FrfHighRequest& q, con
 reference::FrfData reference_frf_file(const FrfHighRequest& q, const std::string& domain) {
   reference::FrfData data = reference::read_frf_csv(q.frf_path, domain);
   reference::Real factor = 1;
-  if (q.units.hz) factor *= boost::multiprecision::atan(reference::Real(1)) * 8;
+  if (q.units.hz) factor *= two_pi();
   if (!q.continuous && q.units.sample_time > 0) factor *= reference::parse_decimal(q.units.sample_time_text);
   for (reference::Real& w : data.omega) w *= factor;
   return data;

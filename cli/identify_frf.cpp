@@ -83,6 +83,10 @@ int run(const IdentifyFrfCommand& c) {
   if (from_frf && !c.selection.empty())
     throw Error(ErrorKind::Input, "--input/--output/--skip-periods", "apply to periodic records (--data --meta), not to --frf");
   require_frequency_units(c.units, c.domain, from_frf);
+  if (c.precision == Precision::High && !c.noise_std.empty())  // before any work: refused, not computed and refused
+    throw Error(ErrorKind::Input, "--noise-std",
+                "the 50-digit reference reads records with their sample variance only; drop --precision high "
+                "(or give M >= 4 periods without --noise-std)");
   if (c.options.r < 0 || c.options.r_max < 0) throw Error(ErrorKind::Input, "--r", "must be positive");
   refuse_overwrite(c.plot_path, {c.frf_path, c.data_path, c.meta_path, c.json_path}, "--plot");
   refuse_overwrite(c.json_path, {c.frf_path, c.data_path, c.meta_path}, "--json");
@@ -124,13 +128,7 @@ int run(const IdentifyFrfCommand& c) {
     source.eiv_variance = c.eiv_variance;
     source.min_input_snr = c.min_input_snr;
   }
-  if (c.precision == Precision::High) {
-    if (!c.noise_std.empty())
-      throw Error(ErrorKind::Input, "--noise-std",
-                  "the 50-digit reference reads records with their sample variance only; drop --precision high "
-                  "(or give M >= 4 periods without --noise-std)");
-    return run_high(c, data, stats, source, where);
-  }
+  if (c.precision == Precision::High) return run_high(c, data, stats, source, where);
 
   const std::string method = frf_method_name(c.domain, c.method);
   FrfResult res;

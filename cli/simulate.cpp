@@ -1,10 +1,10 @@
 // fdsid simulate-records: a periodic multisine experiment on a model.
 #include <algorithm>
-#include <cmath>
 #include <memory>
 
 #include "common.hpp"
 #include "fdsid/error.hpp"
+#include "fdsid/frf_id.hpp"
 #include "fdsid/io.hpp"
 #include "fdsid/json.hpp"
 #include "fdsid/model.hpp"
@@ -35,7 +35,8 @@ int run(const SimulateRecordsCommand& c) {
   std::string outside;
   if (!meta.excited_lines.empty()) {
     const auto [lo_line, hi_line] = std::minmax_element(meta.excited_lines.begin(), meta.excited_lines.end());
-    const double lo = 2 * M_PI * *lo_line / meta.period, hi = 2 * M_PI * *hi_line / meta.period;
+    const Eigen::VectorXd omega = line_frequencies(meta, Domain::Discrete);
+    const double lo = omega.minCoeff(), hi = omega.maxCoeff();
     outside = out_of_band_warning(resonances_outside_band(poles(model), Domain::Discrete, lo, hi), Domain::Discrete,
                                   lo, hi,
                                   "the excited lines " + std::to_string(*lo_line) + " to " + std::to_string(*hi_line) +

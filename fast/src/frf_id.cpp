@@ -939,7 +939,8 @@ void check_records(const Eigen::MatrixXd& samples, int inputs, const RecordMeta&
   require_input_power(samples, inputs, meta);
 }
 
-// ω_k = 2πk/P (discrete, rad/sample) or 2πk/(P Ts) (continuous, rad/s).
+}  // namespace
+
 Eigen::VectorXd line_frequencies(const RecordMeta& meta, Domain domain) {
   const int F = static_cast<int>(meta.excited_lines.size());
   Eigen::VectorXd omega(F);
@@ -947,8 +948,6 @@ Eigen::VectorXd line_frequencies(const RecordMeta& meta, Domain domain) {
     omega(k) = 2 * M_PI * meta.excited_lines[k] / meta.period / (domain == Domain::Continuous ? meta.sample_time : 1.0);
   return omega;
 }
-
-}  // namespace
 
 SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta,
                                    Domain domain) {

@@ -467,13 +467,12 @@ Figure frf_figure(const FrfData& d, const FrfResult& res) {
     model.label = "identified" + ij;
     model.colour = kCycle[(2 * e + 1) % 10];
     std::vector<double> unwrapped(fine + 1);
-    cplx previous = 0;
+    std::vector<cplx> on_grid(fine + 1);  // G of the model on the dense grid, kept for the data's branches
     for (int q = 0; q <= fine; ++q) {
-      const cplx g = at(grid[q])(i, j);
+      on_grid[q] = at(grid[q])(i, j);
       model.x.push_back(grid[q] * hz);
-      model.y.push_back(std::abs(g));
-      unwrapped[q] = q == 0 ? std::arg(g) : unwrapped[q - 1] + std::arg(g / previous);
-      previous = g;
+      model.y.push_back(std::abs(on_grid[q]));
+      unwrapped[q] = q == 0 ? std::arg(on_grid[q]) : unwrapped[q - 1] + std::arg(on_grid[q] / on_grid[q - 1]);
     }
     model_phase = model;
     model_phase.y.clear();
@@ -486,7 +485,7 @@ Figure frf_figure(const FrfData& d, const FrfResult& res) {
       r.x.push_back(d.omega(k) * hz);
       r.y.push_back(std::abs(G[k](i, j) - gm));
       const int q = nearest(d.omega(k));
-      const double branch = unwrapped[q] + wrap(std::arg(gm) - std::arg(at(grid[q])(i, j)));
+      const double branch = unwrapped[q] + wrap(std::arg(gm) - std::arg(on_grid[q]));
       data_phase.x.push_back(d.omega(k) * hz);
       data_phase.y.push_back((branch + std::arg(G[k](i, j) / gm)) * deg);
     }

@@ -204,6 +204,10 @@ void require_input_power(const Eigen::MatrixXd& samples, int inputs, const Recor
 /// and simulate-records refuse such a list).
 int repeated_line(const std::vector<int>& lines);
 
+/// The frequencies of the meta's excited lines: ω_k = 2πk/P (discrete,
+/// rad/sample) or 2πk/(P Ts) (continuous, rad/s), in the meta's order.
+Eigen::VectorXd line_frequencies(const RecordMeta& meta, Domain domain);
+
 /// Periodic input/output record (inputs then outputs as columns) → sample
 /// statistics at the excited lines. ω_k = 2πk/P (discrete, rad/sample) or
 /// 2πk/(P Ts) (continuous, rad/s). Throws Error(Input) naming what is wrong
