@@ -8,7 +8,8 @@
 #     `docs` (docs/make-figures.sh) and `install` (cmake --install and a
 #     find_package(fdsid) consumer, tests/consumer/).
 #  2. One build with coverage AND AddressSanitizer + UndefinedBehaviorSanitizer
-#     (-fno-sanitize-recover=all, -O1) of everything but the benchmarks, which
+#     (-fno-sanitize-recover=all, -O1; every UBSan check but `null` and
+#     `alignment`, which ASan answers: CMakeLists.txt) of everything but the benchmarks, which
 #     runs the `quick` label (every other test) and checks the 90 % line
 #     threshold on fast/ and reference/ (coverage/CMakeLists.txt; LeakSanitizer
 #     suppressions for fontconfig and libltdl only: coverage/lsan.supp).

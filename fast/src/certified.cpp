@@ -12,6 +12,7 @@
 #include "fdsid/format.hpp"
 #include "fdsid/io.hpp"
 #include "fdsid/json.hpp"
+#include "numerics/eigen_instances.hpp"
 
 namespace fdsid {
 

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "fdsid/error.hpp"
+#include "numerics/eigen_instances.hpp"
 
 namespace fdsid {
 

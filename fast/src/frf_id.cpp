@@ -13,6 +13,7 @@
 #include "fdsid/format.hpp"
 #include "numerics/qr.hpp"
 #include "numerics/rank.hpp"
+#include "numerics/eigen_instances.hpp"
 
 namespace fdsid {
 

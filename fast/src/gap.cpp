@@ -16,6 +16,7 @@
 #include "numerics/constants.hpp"
 #include "numerics/fft.hpp"
 #include "numerics/optimize.hpp"
+#include "numerics/eigen_instances.hpp"
 
 namespace fdsid {
 

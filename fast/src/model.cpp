@@ -10,6 +10,7 @@
 #include "fdsid/error.hpp"
 #include "fdsid/format.hpp"
 #include "numerics/lyapunov.hpp"
+#include "numerics/eigen_instances.hpp"
 
 namespace fdsid {
 

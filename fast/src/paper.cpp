@@ -9,6 +9,7 @@
 
 #include "fdsid/error.hpp"
 #include "progress.hpp"
+#include "numerics/eigen_instances.hpp"
 
 namespace fdsid {
 

@@ -16,6 +16,7 @@
 #include "numerics/qr.hpp"
 #include "numerics/rank.hpp"
 #include "numerics/riccati.hpp"
+#include "numerics/eigen_instances.hpp"
 
 namespace fdsid {
 

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "fdsid/error.hpp"
+#include "numerics/eigen_instances.hpp"
 
 namespace fdsid::numerics {
 

@@ -1,4 +1,5 @@
 #include "numerics/qr.hpp"
+#include "numerics/eigen_instances.hpp"
 
 #include <algorithm>
 #include <atomic>

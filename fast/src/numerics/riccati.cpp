@@ -1,4 +1,5 @@
 #include "numerics/riccati.hpp"
+#include "numerics/eigen_instances.hpp"
 
 #include <algorithm>
 #include <limits>
