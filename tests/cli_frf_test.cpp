@@ -330,7 +330,14 @@ TEST_F(CliFrf, ContinuousFrfBilinearAndOrthogonal) {
     const json j = read_json(method + ".json");
     expect_contract_fields(j, "continuous", "pintelon2002-alg2-" + method);
     expect_exact_poles(plant, j);
+    // Review: a continuous-time model from an FRF in rad/s has no sample
+    // period: 0, as the 50-digit reference writes it (it said 1.0, "sampled at 1 s").
+    EXPECT_EQ(j["sample_time"].get<double>(), 0.0);
   }
+  const std::string high = path("high.json");
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--frf", f, "--domain", "continuous", "--order", "4", "--r", "8",
+                                   "--precision", "high", "--json", high}, 600)));
+  EXPECT_EQ(std::stod(read_json("high.json")["sample_time"].get<std::string>()), 0.0);
 }
 
 // ---------------------------------------------------------------------------

@@ -468,7 +468,7 @@ void validate(const FrfData& d, const std::string& where) {
     fail(ErrorKind::Input, where, "U, Y and variance must have one entry per frequency (" + std::to_string(F) + ")");
   const int m = d.inputs(), p = d.outputs(), c = d.columns();
   if (m < 1 || p < 1 || c < 1) fail(ErrorKind::Input, where, "needs at least one input, output and column");
-  if (!(d.sample_time > 0) || !std::isfinite(d.sample_time))
+  if (d.domain == Domain::Discrete && (!(d.sample_time > 0) || !std::isfinite(d.sample_time)))
     fail(ErrorKind::Input, where, "sample time must be positive and finite, got " + fmt(d.sample_time, 6));
   std::vector<std::pair<double, int>> sorted;
   for (int k = 0; k < F; ++k) {
@@ -509,7 +509,7 @@ StateSpace fit_input_matrices(const FrfData& data, const Eigen::MatrixXd& A, con
     b.xi(k) = data.domain == Domain::Discrete ? std::polar(1.0, data.omega(k)) : cplx(0.0, data.omega(k));
   StateSpace m;
   m.domain = data.domain;
-  m.sample_time = data.sample_time;
+  m.sample_time = data.domain == Domain::Discrete ? data.sample_time : 0.0;  // as identify_frf's
   m.A = A;
   m.C = C;
   step3(data, b, A, C, m.B, m.D);
@@ -563,7 +563,7 @@ StateSpace bilinear_to_continuous(const StateSpace& w, double omega_scale) {
   const Eigen::MatrixXd CIAinv = w.C * lu.inverse();
   StateSpace c;
   c.domain = Domain::Continuous;
-  c.sample_time = w.sample_time;
+  c.sample_time = 0;  // a continuous-time model has no sample period (identify_frf)
   c.A = omega_scale * lu.solve(I + w.A);
   c.B = omega_scale * std::sqrt(2.0) * IAinvB;
   c.C = std::sqrt(2.0) * CIAinv;
@@ -647,6 +647,10 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
 
   FrfResult res;
   if (d.domain == Domain::Continuous) {
+    // sample_time 0: a continuous-time model has no sample period, whatever
+    // the data's (rad/s from an FRF file, or records at meta's Ts) — the
+    // value the 50-digit reference writes; 1.0 here read as "sampled at 1 s".
+    est.sample_time = 0;
     if (b.orthogonal) {
       est.domain = Domain::Continuous;
       est.A *= b.omega_scale;

@@ -218,7 +218,9 @@ Model model_from_json(const json& j) {
                      model.domain + "\"");
   if (j.contains("sample_time")) {
     model.sample_time = json_to_real(j.at("sample_time"), "model: field \"sample_time\"");
-    if (!(model.sample_time > 0)) throw InputError("model: field \"sample_time\" must be positive");
+    // 0 is a continuous-time model's "no sample period" (what identify_frf writes).
+    if (!(model.sample_time > 0) && !(model.domain == "continuous" && model.sample_time == 0))
+      throw InputError("model: field \"sample_time\" must be positive (or 0 for a continuous-time model)");
   } else if (model.domain == "discrete") {
     throw InputError("model: field \"sample_time\" is missing: a discrete-time model needs its sample time "
                      "in seconds (1.0 when time is counted in samples)");

@@ -19,8 +19,9 @@ namespace fdsid {
 /// Periodic input/output data: c = 1. FRF data: U[k] = I_m, Y[k] = G(ξ_k), c = m.
 struct FrfData {
   Domain domain = Domain::Discrete;
-  /// Carried into the identified model. Discrete: ω is in rad/sample whatever
-  /// the sample time; continuous: ω is in rad/s.
+  /// Discrete: carried into the identified model (ω is in rad/sample whatever
+  /// the sample time), positive. Continuous: ω is in rad/s and the identified
+  /// model has sample_time 0 (no sample period), whatever this says.
   double sample_time = 1.0;
   Eigen::VectorXd omega;                ///< F distinct frequencies
   std::vector<Eigen::MatrixXcd> U;      ///< F matrices m × c
