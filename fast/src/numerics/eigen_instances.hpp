@@ -9,7 +9,7 @@
 // not instantiate and optimise them again here. Measured on fast/src/model.cpp
 // (EigenSolver, GeneralizedEigenSolver, PartialPivLU, HouseholderQR), gcc 12,
 // the CI's sanitizer + coverage flags: 110 s → 53 s; the library's units
-// repeated these instantiations eight times. Results are unchanged: the same
+// repeated these instantiations in ten units. Results are unchanged: the same
 // template code, compiled with the same flags, in one place.
 //
 // Include it in every fast/ unit that uses one of these classes (or the
