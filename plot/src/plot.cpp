@@ -18,6 +18,7 @@ namespace fdsid::plot {
 namespace {
 
 constexpr double kCharScale = 0.85;  // of PLplot's default character height
+constexpr double kLineWidth = 1.6;    // of a series's line, unless Series::width says otherwise
 
 std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
@@ -112,6 +113,7 @@ void draw_series(plstream& pls, const Series& s, const Panel& p) {
   }
   pls.col0(s.colour);
   pls.lsty(s.dashed ? 2 : 1);
+  pls.width(s.width > 0 ? s.width : kLineWidth);
   if (s.line) {
     // Polylines between the points that can be drawn.
     size_t i = 0;
@@ -124,6 +126,7 @@ void draw_series(plstream& pls, const Series& s, const Panel& p) {
     }
   }
   pls.lsty(1);
+  pls.width(kLineWidth);
   if (!s.y_low.empty() && s.y_low.size() == n && s.y_high.size() == n) {
     for (size_t i = 0; i < n; ++i) {
       PLFLT x = wx[i], lo = to_world(s.y_low[i], p.y.log), hi = to_world(s.y_high[i], p.y.log);
@@ -212,6 +215,7 @@ void draw_legend(plstream& pls, const Panel& p, double x0, double x1, double y0,
     text[i] = s.label.c_str();
     line_colors[i] = s.colour;
     line_styles[i] = s.dashed ? 2 : 1;
+    if (s.width > 0) line_widths[i] = s.width;
     symbol_colors[i] = s.colour;
     symbols[i] = s.symbol.c_str();
   }
@@ -269,8 +273,15 @@ void draw_panel(plstream& pls, const Panel& p) {
     PLFLT by[4] = {y0, y0, y1, y1};
     pls.col0(b.colour);
     pls.fill(4, bx, by);
+    // A strong strip along the bottom marks the band too, so its shading can
+    // stay pale: when most of the axis is flagged the curves must not drown
+    // in it (review finding 47).
+    const double strip = y0 + 0.03 * (y1 - y0);
+    PLFLT sy[4] = {y0, y0, strip, strip};
+    pls.col0(b.colour == ShadeRed ? Red : Grey);
+    pls.fill(4, bx, sy);
   }
-  pls.width(1.6);
+  pls.width(kLineWidth);
   for (const Series& s : p.series) draw_series(pls, s, p);
   pls.width(1.0);
   pls.col0(Black);
@@ -343,8 +354,8 @@ void render(const Figure& fig, const std::string& path) {
     pls.spage(0, 0, fig.width, height, 0, 0);
     // cmap0: white background, black axes, then the Colour palette.
     const PLINT r[] = {255, 0, 31, 255, 44, 214, 148, 140, 227, 127, 188, 23, 225, 255};
-    const PLINT g[] = {255, 0, 119, 127, 160, 39, 103, 86, 119, 127, 189, 190, 225, 215};
-    const PLINT b[] = {255, 0, 180, 14, 44, 40, 189, 75, 194, 127, 34, 207, 225, 215};
+    const PLINT g[] = {255, 0, 119, 127, 160, 39, 103, 86, 119, 127, 189, 190, 225, 234};
+    const PLINT b[] = {255, 0, 180, 14, 44, 40, 189, 75, 194, 127, 34, 207, 225, 234};
     pls.scmap0(r, g, b, static_cast<PLINT>(std::size(r)));
     pls.init();
     pls.ssub(fig.columns, rows);

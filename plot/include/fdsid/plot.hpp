@@ -27,6 +27,9 @@ struct Series {
   bool line = true;           ///< join the points (a non-finite or, on a log axis, non-positive point breaks the line)
   std::string symbol;         ///< marker drawn at each point (UTF-8, e.g. "×", "○", "•"); empty: none
   bool dashed = false;
+  /// Line width in PLplot's units; 0: the default 1.6. A wide pale line under a
+  /// thin one keeps both visible where they coincide (review finding 46).
+  double width = 0;
   /// Optional vertical error bars: y_low[i] .. y_high[i] (same length as y).
   std::vector<double> y_low, y_high;
 };
