@@ -52,6 +52,33 @@ void write_gap_table(const std::string& path, const GapReport& r) {
   write_text_file(path, csv.str());
 }
 
+// The summary line: one of the three outcomes (GapVerdict), never
+// contradicting the numbers printed beside it.
+std::string verdict_line(const GapReport& r) {
+  const double alpha = r.options.alpha;
+  std::string effects;
+  for (Effect e : r.present) effects += (effects.empty() ? "" : ", ") + std::string(fdsid::to_string(e));
+  const std::string share = std::to_string(std::lround(100 * r.explained_share)) + " % of the excess gap";
+  switch (r.verdict) {
+    case GapVerdict::NoGap:
+      return "verdict: no significant gap (p(gap) " + p_text(r.p_gap) + " at level " + fmt(alpha, 3) + ": noise alone)";
+    case GapVerdict::Explained:
+      return "verdict: " + effects + " - explained: what remains is noise (p " + p_text(r.p_after) + " at level " +
+             fmt(alpha, 3) + ")";
+    case GapVerdict::Unexplained: break;
+  }
+  if (r.present.empty()) {
+    std::string best = "none";
+    if (!r.candidates.empty())
+      best = std::string(fdsid::to_string(r.candidates.front().effect())) + " (alone it leaves gap " +
+             sci(r.candidates.front().gap_after) + ")";
+    return "verdict: significant gap (p(gap) " + p_text(r.p_gap) +
+           ") that no effect of the catalogue explains: none passes its test; best single candidate " + best;
+  }
+  return "verdict: " + effects + " - NOT fully explained: " + (r.present.size() > 1 ? "they remove " : "it removes ") + share + ", and what remains (gap " +
+         sci(r.gap_after) + ") is still above the noise (p " + p_text(r.p_after) + " at level " + fmt(alpha, 3) + ")";
+}
+
 int run_gap(const GapCommand& c) {
   refuse_overwrite(c.plot_path, {c.model_path, c.data_path, c.meta_path, c.json_path}, "--plot");
   refuse_overwrite(c.json_path, {c.model_path, c.data_path, c.meta_path}, "--json");
@@ -69,10 +96,7 @@ int run_gap(const GapCommand& c) {
   }
   out << "gap before " << sci(r.gap_before) << " (1 = the model is right up to the noise; " << r.excited
       << " excited lines, M = " << meta.periods << "), after " << sci(r.gap_after) << "\n";
-  out << "verdict: ";
-  if (r.present.empty()) out << "no significant gap (noise alone at level " << o.alpha << ")\n";
-  for (size_t i = 0; i < r.present.size(); ++i) out << (i ? ", " : "") << fdsid::to_string(r.present[i]);
-  if (!r.present.empty()) out << "\n";
+  out << verdict_line(r) << "\n";
   out << "tests: p(gap) " << p_text(r.p_gap) << ", p(nonlinearity, " << r.unexcited << " unexcited lines) "
       << p_text(r.p_nonlinearity) << ", p(leakage) " << p_text(r.p_leakage) << "\n";
   if (!r.bands.empty()) {

@@ -12,14 +12,17 @@ stands for any number of lines (an elided part). A command with no lines
 under it is run for its effect (files the next commands read) and must exit
 0; what it prints is not shown, so not compared.
 
-Skipped, and counted: blocks that show no output at all (command lists and
-synopses), blocks that use data outside the repository (../shared/, which a
-clone does not have) and blocks fenced as ```sh or ```bash.
+Blocks that use the measured data beside the repository (../shared/, which a
+clone alone does not have) run when that folder exists, with ../shared read
+as its absolute path; without it they are skipped. Skipped too, and counted:
+blocks with placeholders (MODEL.json …) and nothing shown, and blocks fenced
+as ```sh or ```bash.
 
 Usage: readme-examples.py FDSID_EXE [README.md]
 Exit 0 when every example matches, 1 with a diff of each mismatch otherwise.
 """
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -79,23 +82,29 @@ def main():
     readme = sys.argv[2] if len(sys.argv) > 2 else os.path.join(os.path.dirname(__file__), "..", "README.md")
     source = os.path.dirname(os.path.abspath(readme))
     text = open(readme, encoding="utf-8").read()
+    shared = os.path.realpath(os.path.join(source, "..", "shared"))
     ran = skipped = failed = 0
     for start, info, block in blocks(text):
         ex = examples(block)
         if not ex or not any("./build/fdsid" in cmd for cmd, _ in ex):
             continue
-        if (info in ("sh", "bash") or any("../shared" in cmd or "$F" in cmd for cmd, _ in ex)
-                or not any(any(l.strip() for l in expected) for _, expected in ex)):
+        uses_shared = any("../shared" in cmd for cmd, _ in ex)
+        placeholders = any(w in cmd for cmd, _ in ex for w in ("MODEL.json", "DATA.csv", "META.json"))
+        if info in ("sh", "bash") or (uses_shared and not os.path.isdir(shared)) or placeholders:
             skipped += 1
             continue
+        ex = [(cmd.replace("../shared", shared), expected) for cmd, expected in ex]
         with tempfile.TemporaryDirectory(prefix="fdsid-readme-") as work:
             os.makedirs(os.path.join(work, "build"))
             os.symlink(exe, os.path.join(work, "build", "fdsid"))
             for d in ("data", "fixtures", "docs"):
                 os.symlink(os.path.join(source, d), os.path.join(work, d))
+            env = ""  # assignments (F=…) earlier in the block hold for the commands after them
             for cmd, expected in ex:
                 ran += 1
-                p = subprocess.run(["bash", "-c", cmd], cwd=work, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                if re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*=\S+", cmd.strip()):
+                    env += cmd.strip() + "; "
+                p = subprocess.run(["bash", "-c", env + cmd], cwd=work, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                                    timeout=600)
                 actual = p.stdout.decode("utf-8", "replace").rstrip("\n").split("\n")
                 if actual == [""]:
@@ -113,7 +122,7 @@ def main():
                     for l in actual:
                         print("    " + l)
     print(f"README examples: {ran} commands run, {failed} differ from the README; {skipped} blocks skipped "
-          f"(no output shown, data outside the repository, or scripts)")
+          f"(synopses with placeholders, scripts, or blocks on ../shared when {shared} is absent)")
     return 1 if failed else 0
 
 

@@ -14,6 +14,7 @@
 
 #include "fdsid/error.hpp"
 #include "fdsid/gap.hpp"
+#include "fdsid/gap_cases.hpp"
 #include "fdsid/paper.hpp"
 #include "fdsid/simulate.hpp"
 #include "gap_systems.hpp"
@@ -242,6 +243,75 @@ TEST(GapDiagnosis, TransientFromRestIsLeakage) {
   EXPECT_LT(r.p_leakage, 1e-6);
   EXPECT_LT(r.periods_used, kM);
   EXPECT_LT(r.gap_after, 2.0);
+}
+
+// Issue 17: the verdict follows the numbers, and the chosen set never leaves
+// more than an effect admitted alone. Cases from the blind generator
+// (gap_cases.hpp): subtle and clear gain errors at M = 4 (the issue's
+// counterexample: a 1.9 % gain error, M = 4, answered with a pair whose joint
+// gap was 10.7 where the gain alone left 0.87), subtle pairs, effect-free
+// records. Checked on every case, whatever its truth:
+//  - "explained" only with effects present and what remains passing the gap
+//    test at alpha; "no_gap" only with nothing present and the gap test
+//    passing; otherwise "unexplained";
+//  - gap_after <= the gap left by any linear effect that its own tests admit
+//    alone (F-test at effect_alpha and the relevance rule, read off the
+//    candidates) + 3 null sd of the gap (gap_null_sd): the selection's stated
+//    slack for a cheaper effect chosen on a near-tie (gap.hpp);
+//  - the path ends at gap_after, one stage per present effect.
+TEST(GapDiagnosis, VerdictFollowsTheNumbersAndNeverWorseThanTheBestSingle) {
+  struct Spec {
+    std::vector<Effect> effects;
+    Strength strength;
+    int periods;
+  };
+  const std::vector<Spec> specs = {
+      {{Effect::GainError}, Strength::Subtle, 4},     {{Effect::GainError}, Strength::Clear, 4},
+      {{Effect::GainError, Effect::Delay}, Strength::Subtle, 8},
+      {{Effect::SensorDynamics, Effect::ModeMismatch}, Strength::Subtle, 8},
+      {{Effect::UnmodelledMode, Effect::Nonlinearity}, Strength::Clear, 8}, {{}, Strength::None, 4},
+      {{}, Strength::None, 8}};
+  int explained = 0;
+  for (size_t i = 0; i < specs.size(); ++i)
+    for (std::uint64_t seed : {1u, 2u}) {
+      GapCaseOptions o;
+      o.effects = specs[i].effects;
+      o.strength = specs[i].strength;
+      o.periods = specs[i].periods;
+      o.period = 512;
+      o.seed = 100 * i + seed;
+      const GapCase c = make_gap_case(o);
+      const GapReport r = diagnose_gap(c.sim_model, c.record, 1, c.meta);
+      SCOPED_TRACE("spec " + std::to_string(i) + ", seed " + std::to_string(o.seed) + ": " + verdict(r));
+      const double alpha = r.options.alpha;
+      switch (r.verdict) {
+        case GapVerdict::NoGap:
+          EXPECT_TRUE(r.present.empty());
+          EXPECT_GE(r.p_gap, alpha);
+          break;
+        case GapVerdict::Explained:
+          ++explained;
+          EXPECT_FALSE(r.present.empty());
+          EXPECT_GE(r.p_after, alpha);
+          break;
+        case GapVerdict::Unexplained:
+          EXPECT_LT(r.present.empty() ? r.p_gap : r.p_after, alpha);
+          break;
+      }
+      const double floor = 3 * gap_null_sd(r.periods_used, r.excited);
+      for (const EffectFit& f : r.candidates) {
+        const bool admitted = is_linear(f.effect()) && f.p_value < r.options.effect_alpha &&
+                              r.gap_before - f.gap_after >= r.options.min_share * std::max(r.gap_before - 1, floor);
+        if (admitted) {
+          EXPECT_LE(r.gap_after, f.gap_after + floor) << to_string(f.effect());
+        }
+      }
+      ASSERT_EQ(r.path.size(), r.present.size());
+      if (!r.path.empty()) {
+        EXPECT_DOUBLE_EQ(r.path.back().gap_after, r.gap_after);
+      }
+    }
+  EXPECT_GT(explained, 0);  // the checks above met the "explained" branch at least once
 }
 
 TEST(GapDiagnosis, RefusesWhatItCannotUse) {

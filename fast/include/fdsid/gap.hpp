@@ -23,12 +23,19 @@
 ///  - leakage: period l against the mean of the later ones, d = E_l − Ē_{>l},
 ///    |d|²/(s²_{>l}(1 + 1/(M−l−1))) ~ F(2, 2(M−l−1) − 2) on every line — model
 ///    errors are periodic and cancel in d, so this test sees only the transient;
-///  - linear effects: added greedily, each admitted by a quasi-likelihood F-test
+///  - linear effects: each admitted by a quasi-likelihood F-test
 ///    F = ((V₀ − V₁)/q) / (V₁/(2K − q_total)) ~ F(q, 2K − q_total) (V the
 ///    variance-weighted residual sum, q the effect's real parameters), which
 ///    compares the reduction with the misfit that remains rather than with the
 ///    noise alone, and by a relevance rule (it must remove a stated share of
 ///    the current excess gap − 1).
+/// Selection: forward, every stage refitted jointly from the model as given
+/// and admitted by its effect's test on that joint fit; no stage may raise the
+/// gap by more than 3 null standard deviations of it; among admissible
+/// additions the lowest Schwarz criterion wins (a richer effect pays for its
+/// parameters). The chosen set never leaves more than the best effect admitted
+/// alone by more than those 3 sd. Verdict: no_gap, explained (what remains
+/// passes the gap test at alpha) or unexplained (see GapVerdict).
 /// Bands: Benjamini–Hochberg at a stated false-discovery rate over the
 /// per-line p-values of the model as given; flagged excited lines within two
 /// excited lines of each other form one band (windows of 8 lines when no single
@@ -143,8 +150,35 @@ struct EffectFit {
   Effect effect() const { return static_cast<Effect>(parameters.index()); }
 };
 
+/// One stage of the selection path: the effect added, the set after the
+/// stage (an exchange may have replaced an earlier member), the gap it leaves
+/// (fitted jointly) and the p-value of the test that admitted the addition.
+struct SelectionStep {
+  Effect added = Effect::GainError;
+  std::vector<Effect> set;
+  double gap_after = 0;
+  double p_value = 1;
+};
+
+/// The three honest outcomes of a diagnosis (issue 17).
+enum class GapVerdict {
+  NoGap,        ///< "no_gap": the gap test does not reject and no effect is admitted
+  Explained,    ///< "explained": effects admitted, and what remains passes the gap test
+  Unexplained,  ///< "unexplained": a significant gap that the admitted effects (if any) do not fully explain
+};
+const char* to_string(GapVerdict verdict);
+
 struct GapReport {
   double gap_before = 0, gap_after = 0;
+  GapVerdict verdict = GapVerdict::NoGap;
+  /// The gap test (Fisher's combination over the excited lines) on what
+  /// remains after the present effects; p_gap when none is present.
+  double p_after = 1;
+  /// Share of the excess gap the present effects remove:
+  /// (gap_before − gap_after) / (gap_before − 1); 0 when none is present.
+  double explained_share = 0;
+  /// The forward selection's stages, in order (empty when none was admitted).
+  std::vector<SelectionStep> path;
   std::vector<Effect> present;                     ///< judged present, largest shrink first
   std::vector<std::array<double, 2>> bands;        ///< Hz (cycles/sample when Ts = 1)
   std::vector<EffectFit> candidates;               ///< every effect tried alone, best first
