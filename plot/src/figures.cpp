@@ -132,6 +132,12 @@ Panel pole_zero_panel(const StateSpace& model) {
   p.title = std::string("poles and zeros (") + (discrete ? "z" : "s") + "-plane)";
   if (outside > 0) p.series.back().label += " (" + std::to_string(outside) + " beyond 3·max|pole| not drawn)";
   p.legend = LegendAt::TopRight;
+  // Room above the map for the legend (review finding 41: it hid the +j pole
+  // of the Silverbox's pair): the legend box is entries × 8 % + 4 % of the
+  // panel's height (plot.hpp, legend_corner), plus 3 % of margin; a headroom h
+  // of the data span leaves h / (1 + h) of the height empty at the top.
+  const double f = 0.08 * static_cast<double>(p.series.size()) + 0.04 + 0.03;
+  p.y.headroom = f / (1 - f);
   return p;
 }
 
