@@ -79,9 +79,10 @@ Panel singular_value_panel(const Eigen::VectorXd& sv, int marked, const std::str
   return p;
 }
 
-// Poles (×) and zeros (○); the unit circle for discrete time, the imaginary
-// axis for continuous time. Zeros far outside the poles' scale are counted in
-// the title rather than squeezing the view.
+}  // namespace
+
+// Poles (×) and zeros (○) (figures.hpp). Zeros far outside the poles' scale are
+// counted in the legend rather than squeezing the view.
 Panel pole_zero_panel(const StateSpace& model) {
   const bool discrete = model.domain == Domain::Discrete;
   Panel p;
@@ -140,6 +141,8 @@ Panel pole_zero_panel(const StateSpace& model) {
   p.y.headroom = f / (1 - f);
   return p;
 }
+
+namespace {
 
 }  // namespace
 

@@ -240,22 +240,8 @@ void draw_legend(plstream& pls, const Panel& p, double x0, double x1, double y0,
 }
 
 void draw_panel(plstream& pls, const Panel& p) {
-  Range rx, ry;
-  for (const Series& s : p.series) {
-    for (double v : s.x) rx.add(to_world(v, p.x.log));
-    for (double v : s.y) ry.add(to_world(v, p.y.log));
-    for (double v : s.y_high) ry.add(to_world(v, p.y.log));
-  }
-  auto [x0, x1] = window(p.x, rx);
-  auto [y0, y1] = window(p.y, ry);
+  const auto [x0, x1, y0, y1] = panel_window(p);
   if (p.equal_aspect) {
-    // Square data ranges on a square viewport.
-    const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
-    const double half = 0.5 * std::max(x1 - x0, y1 - y0);
-    x0 = cx - half;
-    x1 = cx + half;
-    y0 = cy - half;
-    y1 = cy + half;
     pls.vpas(0.15, 0.95, 0.14, 0.88, 1.0);
   } else {
     pls.vpor(0.15, 0.97, 0.14, 0.88);
@@ -324,6 +310,27 @@ void check_plot_path(const std::string& path) {
   const std::string ext = lower_extension(path);
   if (ext != ".svg" && ext != ".png")
     throw Error(ErrorKind::Input, "--plot", "\"" + path + "\" must end in .svg or .png (the format is read from it)");
+}
+
+std::array<double, 4> panel_window(const Panel& p) {
+  Range rx, ry;
+  for (const Series& s : p.series) {
+    for (double v : s.x) rx.add(to_world(v, p.x.log));
+    for (double v : s.y) ry.add(to_world(v, p.y.log));
+    for (double v : s.y_high) ry.add(to_world(v, p.y.log));
+  }
+  auto [x0, x1] = window(p.x, rx);
+  auto [y0, y1] = window(p.y, ry);
+  if (p.equal_aspect) {
+    // Square data ranges on a square viewport.
+    const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+    const double half = 0.5 * std::max(x1 - x0, y1 - y0);
+    x0 = cx - half;
+    x1 = cx + half;
+    y0 = cy - half;
+    y1 = cy + half;
+  }
+  return {x0, x1, y0, y1};
 }
 
 void render(const Figure& fig, const std::string& path) {

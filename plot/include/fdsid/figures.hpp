@@ -12,6 +12,11 @@
 
 namespace fdsid::plot {
 
+/// Poles (×) and zeros (○) of a model: the unit circle for discrete time, the
+/// imaginary axis for continuous time, with room above the map for the legend
+/// (review finding 41). The last panel of the identification figures.
+Panel pole_zero_panel(const StateSpace& model);
+
 /// Akçay (2011) Table 1: σ_k of Van Overschee's Ĝ_9F_8 (Eq. 13) and of Akçay's
 /// 𝒴 (Eq. 19) against M, log–log, beside the rounding level u·σ_1.
 Figure table1_figure(const std::vector<Table1Row>& rows);

@@ -11,6 +11,7 @@
 ///
 /// The figures themselves (which quantity on which axis) are built in
 /// figures.hpp from the results of fast/; this file knows nothing of the papers.
+#include <array>
 #include <string>
 #include <utility>
 #include <vector>
@@ -100,6 +101,11 @@ struct Figure {
 /// PLplot fails. Not thread-safe (PLplot keeps global state): call it from one
 /// thread at a time.
 void render(const Figure& fig, const std::string& path);
+
+/// The world window [x0, x1, y0, y1] render() draws the panel in (log10 of a
+/// log axis): the data's range padded by 4 %, the axis headroom added, and for
+/// an equal-aspect panel squared about its centre.
+std::array<double, 4> panel_window(const Panel& p);
 
 /// Where render() puts a panel's legend of `entries` lines in the window
 /// [x0, x1] × [y0, y1] (world coordinates: log10 of a log axis): the
