@@ -1064,7 +1064,7 @@ EffectFit leakage_alone(const Spectra& s, const Augment& a0, int drop, double p_
 }
 
 // One stage of the forward selection: a set of effects fitted jointly on the
-// model as given — linear effects in the order added (Diagnosis::fit_set),
+// model as given — linear effects (Diagnosis::fit_set, in kAllEffects' order),
 // the transient periods dropped (leakage), the nonlinear distortion refitted
 // on top (nonlinearity) — and its pooled cost.
 struct Stage {
@@ -1182,8 +1182,7 @@ class ForwardSelection {
     if (is_linear(e)) {
       const int q = next.q - cur.q;
       p = dg_.f_test(cur.V, next.V, q, next.q);
-      next.admitted = next.admitted && p < o_.effect_alpha &&
-                      cur.gap - next.gap >= o_.min_share * std::max(cur.gap - 1, floor_);
+      next.admitted = next.admitted && p < o_.effect_alpha && relevant(cur.gap, next.gap);
     }
     for (EffectFit& f : next.fits)
       if (f.effect() == e) f.p_value = p;
@@ -1211,7 +1210,7 @@ class ForwardSelection {
         const int q = alt.q - cur.q;
         const double p = dg_.f_test(cur.V, alt.V, std::max(1, q), alt.q);
         if (score(alt) < score(next) && p < o_.effect_alpha && alt.gap <= cur.gap + floor_ &&
-            cur.gap - alt.gap >= o_.min_share * std::max(cur.gap - 1, floor_)) {
+            relevant(cur.gap, alt.gap)) {
           for (EffectFit& f : alt.fits)
             if (f.effect() == g || f.effect() == added) f.p_value = p;
           next = std::move(alt);
@@ -1275,6 +1274,12 @@ class ForwardSelection {
     st.q = 0;
     for (const EffectFit& f : st.fits) st.q += f.dof;
     return st;
+  }
+
+  // The relevance rule: a step from gap g_from to g_to must remove min_share
+  // of the excess gap g_from − 1 (or of the floor, when the excess is below it).
+  bool relevant(double g_from, double g_to) const {
+    return g_from - g_to >= o_.min_share * std::max(g_from - 1, floor_);
   }
 
   double score(const Stage& st) const {
