@@ -630,6 +630,60 @@ Real v_sub(const Model& model, const FrfData& data) {
   return sum;
 }
 
+CostGradient cost_gradient(const Model& model, const FrfData& data) {
+  const Shape s = check_data(data);
+  const Eigen::Index n = model.A.rows();
+  // Each matrix against the shape that A (n) and the data (m = U rows, p = Y
+  // rows) imply, so that the message names the offending matrix.
+  const auto expect = [](const char* name, const MatrixR& X, Eigen::Index rows, Eigen::Index cols) {
+    if (X.rows() != rows || X.cols() != cols)
+      throw InputError(std::string("model: ") + name + " is " + std::to_string(X.rows()) + "x" +
+                       std::to_string(X.cols()) + ", expected " + std::to_string(rows) + "x" +
+                       std::to_string(cols) + " (n from A, m from data U, p from data Y)");
+  };
+  expect("A", model.A, n, n);
+  expect("B", model.B, n, s.m);
+  expect("C", model.C, s.p, n);
+  expect("D", model.D, s.p, s.m);
+  if (model.domain != "discrete" && model.domain != "continuous")
+    throw InputError("model: domain \"" + model.domain + "\" is neither discrete nor continuous");
+
+  const MatrixC B = model.B.cast<Complex>(), C = model.C.cast<Complex>(),
+                D = model.D.cast<Complex>();
+  const MatrixC I = MatrixC::Identity(n, n);
+  // Σ_k of U Rᴴ (m × p), X B U Rᴴ (n × p), U Rᴴ C X (m × n), X B U Rᴴ C X (n × n).
+  MatrixC sum_D = MatrixC::Zero(s.m, s.p), sum_C = MatrixC::Zero(n, s.p),
+          sum_B = MatrixC::Zero(s.m, n), sum_A = MatrixC::Zero(n, n);
+  CostGradient g;
+  g.cost = 0;
+  for (std::size_t k = 0; k < data.omega.size(); ++k) {
+    const Real& w = data.omega[k];
+    const Complex xi = model.domain == "discrete" ? Complex(cos(w), sin(w)) : Complex(Real(0), w);
+    MatrixC X;  // X_k = (ξ_k I − A)⁻¹
+    if (!resolvent_solve(model.A, xi, I, &X))
+      throw InputError("cost_gradient: omega = " + fmt(w) + " at " + at(k) + " is on a pole of the model");
+    const MatrixC XB = X * B, CX = C * X;
+    const MatrixC E = data.Y[k] - (D + C * XB) * data.U[k];  // E_k, p × c
+    MatrixC R(s.p, s.c);                                      // R_k = E_k ./ σ²_k
+    for (int i = 0; i < s.p; ++i)
+      for (int j = 0; j < s.c; ++j) {
+        R(i, j) = E(i, j) / data.variance[k](i, j);
+        g.cost += std::norm(E(i, j)) / data.variance[k](i, j);
+      }
+    const MatrixC URh = data.U[k] * R.adjoint();  // U_k R_kᴴ, m × p
+    const MatrixC XBURh = XB * URh;               // X_k B U_k R_kᴴ, n × p
+    sum_D += URh;
+    sum_C += XBURh;
+    sum_B += URh * CX;
+    sum_A += XBURh * CX;
+  }
+  g.dD = Real(-2) * sum_D.real().transpose();
+  g.dC = Real(-2) * sum_C.real().transpose();
+  g.dB = Real(-2) * sum_B.real().transpose();
+  g.dA = Real(-2) * sum_A.real().transpose();
+  return g;
+}
+
 std::vector<std::vector<MatrixC>> period_spectra(const std::vector<std::vector<Real>>& channels,
                                                  int period, int periods,
                                                  const std::vector<int>& lines) {

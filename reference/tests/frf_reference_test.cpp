@@ -1,7 +1,8 @@
 // Tests of the high-precision reference of Pintelon (2002) (reference/frf_id):
 // noise-free exactness of Algorithms 1, 2.1 and 2.2 (SISO, FRF, MIMO), the
-// bilinear back-transform, the errors-in-variables data of Section 5, the
-// DFT of Eq. (4), and the input checks.
+// bilinear back-transform, the cost of Eq. (35) and its gradient, the
+// errors-in-variables data of Section 5, the DFT of Eq. (4), and the input
+// checks.
 //
 // Tolerances. u = std::numeric_limits<Real>::epsilon() ≈ 1e-50 is the unit
 // roundoff of the 50-digit format. On noise-free data every step of the
@@ -21,7 +22,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdint>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -318,6 +321,173 @@ TEST(FrfReference, VSubOfTrueModelIsZero) {
   Real expected = 0;
   for (const MatrixR& v : data.variance) expected += Real("0.25") / v(0, 0);
   EXPECT_LT(abs(v_sub(wrong, data) - expected) / expected, Real("1e-45"));
+}
+
+// ---------------------------------------------------------------------------
+// cost_gradient: Eq. (35) and its gradient in (A, B, C, D)
+
+// A deterministic stream of exact decimals q/1000, q ∈ {−1000, …, 1000}, from
+// std::mt19937 (whose output sequence the standard fixes; the modulo is used
+// instead of a distribution, whose algorithm is implementation-defined), so
+// no value ever passes through a double.
+class DecimalStream {
+ public:
+  explicit DecimalStream(std::uint32_t seed) : rng_(seed) {}
+  Real operator()() { return Real(static_cast<int>(rng_() % 2001) - 1000) / Real(1000); }
+  MatrixR matrix(Eigen::Index rows, Eigen::Index cols, const Real& scale) {
+    MatrixR X(rows, cols);
+    for (Eigen::Index i = 0; i < rows; ++i)
+      for (Eigen::Index j = 0; j < cols; ++j) X(i, j) = scale * (*this)();
+    return X;
+  }
+
+ private:
+  std::mt19937 rng_;
+};
+
+// Data for `model` at `omega`: c columns of random inputs (entries in the unit
+// square), Y = G U + a fixed random perturbation (each part in [−0.1, 0.1]),
+// non-uniform variances (1 + (3k + 2i + j) mod 5)/4.
+FrfData perturbed_data(const Model& model, const std::vector<Real>& omega, int c,
+                       DecimalStream& draw) {
+  FrfData d;
+  d.domain = model.domain;
+  d.omega = omega;
+  const Eigen::Index m = model.B.cols(), p = model.C.rows();
+  const Real tenth("0.1");
+  for (std::size_t k = 0; k < omega.size(); ++k) {
+    MatrixC U(m, c), noise(p, c);
+    for (Eigen::Index i = 0; i < m; ++i)
+      for (int j = 0; j < c; ++j) U(i, j) = Complex(draw(), draw());
+    for (Eigen::Index i = 0; i < p; ++i)
+      for (int j = 0; j < c; ++j) noise(i, j) = Complex(tenth * draw(), tenth * draw());
+    d.U.push_back(U);
+    d.Y.push_back(frequency_response(model, omega[k]) * U + noise);
+    MatrixR var(p, c);
+    for (Eigen::Index i = 0; i < p; ++i)
+      for (int j = 0; j < c; ++j)
+        var(i, j) = Real(1 + (3 * static_cast<int>(k) + 2 * static_cast<int>(i) + j) % 5) / 4;
+    d.variance.push_back(var);
+  }
+  return d;
+}
+
+// The gradient of cost_gradient against central differences of v_sub (an
+// independent evaluation of the cost, through frequency_response), entry by
+// entry of A, B, C, D; and cost against v_sub. Returns the worst difference
+// relative to the largest gradient entry.
+//
+// Tolerance. The central difference (V(θ + h e) − V(θ − h e))/(2h) differs from
+// ∂V/∂θ_e by h²/6 · ∂³V/∂θ_e³ (truncation) plus the rounding error of the two
+// V values divided by 2h. Each V carries ≈ c u κ V (u ≈ 1e-50; κ ≲ 10, the
+// condition of the resolvent solves of these well-damped models; c ≲ 10 for
+// sums of F p c ≤ 28 terms), so with h = 1e-20: truncation ≈ 1e-40 |V'''|,
+// rounding ≈ u/h · V ≈ 1e-30 V (≲ 1e-28 V with the constants). V, V''' and the
+// largest gradient entry are of comparable size for these O(1) models
+// (V / max|∂V| is printed), so the discrepancy is ≈ 1e-30 relative to
+// max|∂V|: tol 1e-25 leaves a margin of ≥ 1e3 and still rejects any slip in
+// the formulas (a wrong transpose, conjugate or sign gives O(1)). cost vs
+// v_sub: the same sums, with X B from (ξI − A)⁻¹ times B instead of a solve
+// with right-hand side B: ≲ c u κ ≈ 1e-48 relative: tol 1e-45.
+Real check_gradient(const std::string& name, const Model& model, const FrfData& data) {
+  const CostGradient g = cost_gradient(model, data);
+  const Real V = v_sub(model, data);
+  const Real cost_error = abs(g.cost - V) / V;
+  EXPECT_LT(cost_error, Real("1e-45")) << name;
+  EXPECT_EQ(g.dA.rows(), model.A.rows());
+  EXPECT_EQ(g.dA.cols(), model.A.cols());
+  EXPECT_EQ(g.dB.rows(), model.B.rows());
+  EXPECT_EQ(g.dB.cols(), model.B.cols());
+  EXPECT_EQ(g.dC.rows(), model.C.rows());
+  EXPECT_EQ(g.dC.cols(), model.C.cols());
+  EXPECT_EQ(g.dD.rows(), model.D.rows());
+  EXPECT_EQ(g.dD.cols(), model.D.cols());
+
+  const Real h("1e-20");
+  const Real scale = std::max({Real(g.dA.cwiseAbs().maxCoeff()), Real(g.dB.cwiseAbs().maxCoeff()),
+                               Real(g.dC.cwiseAbs().maxCoeff()), Real(g.dD.cwiseAbs().maxCoeff())});
+  Real worst = 0;
+  std::string where = "none";
+  const struct {
+    const char* name;
+    MatrixR Model::*theta;
+    const MatrixR* grad;
+  } parts[] = {{"A", &Model::A, &g.dA}, {"B", &Model::B, &g.dB}, {"C", &Model::C, &g.dC},
+               {"D", &Model::D, &g.dD}};
+  for (const auto& part : parts)
+    for (Eigen::Index a = 0; a < (model.*part.theta).rows(); ++a)
+      for (Eigen::Index b = 0; b < (model.*part.theta).cols(); ++b) {
+        Model plus = model, minus = model;
+        (plus.*part.theta)(a, b) += h;
+        (minus.*part.theta)(a, b) -= h;
+        const Real difference = (v_sub(plus, data) - v_sub(minus, data)) / (2 * h);
+        const Real error = abs(difference - (*part.grad)(a, b)) / scale;
+        if (error > worst) {
+          worst = error;
+          where = std::string(part.name) + "(" + std::to_string(a) + "," + std::to_string(b) + ")";
+        }
+      }
+  std::printf("%s: V = %s, max|dV| = %s, |cost - v_sub|/V = %s (tol 1e-45), worst |central "
+              "difference - gradient| / max|dV| = %s at d%s (tol 1e-25)\n",
+              name.c_str(), sci(V).c_str(), sci(scale).c_str(), sci(cost_error).c_str(),
+              sci(worst).c_str(), where.c_str());
+  EXPECT_GT(scale, Real("1e-3")) << name << ": the gradient is too small for a relative check";
+  EXPECT_LT(worst, Real("1e-25")) << name << " worst at d" << where;
+  return worst;
+}
+
+TEST(FrfReference, CostGradientMatchesCentralDifferences) {
+  // Discrete, n = 3, m = 1, p = 2, c = 2 columns, F = 7. Entries of A in
+  // [−0.3, 0.3]: every row sum of |A| ≤ 0.9, so ρ(A) ≤ ‖A‖_∞ < 1 (stable).
+  DecimalStream draw(20240611u);
+  Model discrete;
+  discrete.A = draw.matrix(3, 3, Real("0.3"));
+  discrete.B = draw.matrix(3, 1, Real(1));
+  discrete.C = draw.matrix(2, 3, Real(1));
+  discrete.D = draw.matrix(2, 1, Real(1));
+  const FrfData d_data = perturbed_data(discrete, irregular_grid(7), 2, draw);
+  check_gradient("cost gradient, discrete n=3 m=1 p=2", discrete, d_data);
+
+  // Continuous, n = 2, m = 2, p = 1, c = 2, F = 7 log-spaced in 0.1 … 10 rad/s.
+  // A = −I + entries in [−0.3, 0.3]: Gershgorin discs centred at ≤ −0.7 with
+  // radius ≤ 0.3, so every eigenvalue has real part ≤ −0.4 (stable).
+  Model continuous;
+  continuous.domain = "continuous";
+  continuous.sample_time = 0;
+  continuous.A = draw.matrix(2, 2, Real("0.3")) - MatrixR::Identity(2, 2);
+  continuous.B = draw.matrix(2, 2, Real(1));
+  continuous.C = draw.matrix(1, 2, Real(1));
+  continuous.D = draw.matrix(1, 2, Real(1));
+  const FrfData c_data = perturbed_data(continuous, log_grid(7, -1, 1), 2, draw);
+  check_gradient("cost gradient, continuous n=2 m=2 p=1", continuous, c_data);
+
+  // The true model on its noise-free data is a minimum: V = 0 and ∇V = 0 up to
+  // rounding (R_k ≲ 1e-49 per entry, gradient terms O(1) times that).
+  FrfData clean = d_data;
+  for (std::size_t k = 0; k < clean.omega.size(); ++k)
+    clean.Y[k] = frequency_response(discrete, clean.omega[k]) * clean.U[k];
+  const CostGradient at_truth = cost_gradient(discrete, clean);
+  EXPECT_LT(at_truth.cost, Real("1e-90"));
+  EXPECT_LT(at_truth.dA.cwiseAbs().maxCoeff(), Real("1e-45"));
+  EXPECT_LT(at_truth.dB.cwiseAbs().maxCoeff(), Real("1e-45"));
+  EXPECT_LT(at_truth.dC.cwiseAbs().maxCoeff(), Real("1e-45"));
+  EXPECT_LT(at_truth.dD.cwiseAbs().maxCoeff(), Real("1e-45"));
+
+  // Input checks: a model that disagrees with the data names the matrix.
+  Model wrong = discrete;
+  wrong.B = MatrixR::Ones(3, 2);  // the data have m = 1
+  try {
+    cost_gradient(wrong, d_data);
+    ADD_FAILURE() << "B of the wrong shape accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("B is 3x2"), std::string::npos) << e.what();
+  }
+  wrong = discrete;
+  wrong.C = MatrixR::Ones(1, 3);  // the data have p = 2
+  EXPECT_THROW(cost_gradient(wrong, d_data), InputError);
+  FrfData bad = d_data;
+  bad.variance[4](1, 0) = 0;
+  EXPECT_THROW(cost_gradient(discrete, bad), InputError);
 }
 
 // Section 5 by hand, M = 4, F = 1: U^[l] = j + d_l, Y^[l] = 2 + e_l with

@@ -116,6 +116,43 @@ MatrixC frequency_response(const Model& model, const Real& omega);
 /// Eq. (35): Σ_k Σ_columns Σ_outputs |Y − G U|² / σ², G = frequency_response.
 Real v_sub(const Model& model, const FrfData& data);
 
+/// Eq. (35)'s cost and its exact gradient with respect to every entry of
+/// A, B, C, D (real matrices), in 50 digits: the oracle that a double-precision
+/// optimiser of the maximum-likelihood (weighted least squares) cost stopped at
+/// a stationary point.
+struct CostGradient {
+  Real cost;               ///< V at the model (equals v_sub)
+  MatrixR dA, dB, dC, dD;  ///< ∂V/∂A_ab etc., same shapes as A, B, C, D
+};
+
+/// Gradient of V(θ) = Σ_k Σ_j Σ_i |Y_k − G(ξ_k) U_k|²_{ij} / σ²_{k,ij} (Eq. 35,
+/// the frequency-domain ML cost for known noise variance) with respect to
+/// θ = (A, B, C, D).
+///
+/// Method: X_k = (ξ_k I − A)⁻¹ (ξ = e^{jω} discrete, jω continuous, from
+/// model.domain as in frequency_response and v_sub), G_k = D + C X_k B,
+/// E_k = Y_k − G_k U_k (p × c), R_k = E_k ./ σ²_k (entrywise), so
+/// V = Σ_k Re tr(E_kᴴ R_k). For real perturbations, d|e|²/σ² = 2 Re(conj(r) de),
+/// hence dV = 2 Re Σ_k tr(R_kᴴ dE_k) = −2 Re Σ_k tr(U_k R_kᴴ dG_k), and
+/// dG = dD + dC X B + C X dA X B + C X dB (from dX = X dA X). With
+/// tr(M dZ) = Σ_ab M_ba dZ_ab and the cyclic property:
+///   ∂V/∂D = −2 Re Σ_k (U_k R_kᴴ)ᵀ,            ∂V/∂C = −2 Re Σ_k (X_k B U_k R_kᴴ)ᵀ,
+///   ∂V/∂B = −2 Re Σ_k (U_k R_kᴴ C X_k)ᵀ,      ∂V/∂A = −2 Re Σ_k (X_k B U_k R_kᴴ C X_k)ᵀ.
+/// X_k by the real 2n × 2n column-pivoted QR solve of frequency_response with
+/// right-hand side I_n.
+/// Numerical aspects: cost O(F (n³ + n² (m + p) + n p c)); every term is exact
+/// up to u·κ(ξ_k I − A), u ≈ 1e-50, but at a stationary point the terms cancel,
+/// so judge the gradient absolutely (against Σ_k of the moduli of the terms, or
+/// against V), not relative to its own size.
+/// Throws InputError as v_sub for invalid data (message names index and
+/// field), for a model whose A, B, C, D shapes disagree with each other or with
+/// the data's m = U rows and p = Y rows (message names the matrix), and when
+/// some ω_k lies on a pole of the model.
+/// References: R. Pintelon, Automatica 38 (2002) 1295-1311, Eq. (35);
+/// R. Pintelon & J. Schoukens, System Identification: A Frequency Domain
+/// Approach (2012), Ch. 9 (Jacobian of the ML cost of state-space models).
+CostGradient cost_gradient(const Model& model, const FrfData& data);
+
 /// Eq. (4): DFT Z(k) = (1/√N) Σ_t z(t) e^{−j2πkt/N} of each period of a record of
 /// `periods` whole periods of length N = `period` (one std::vector<Real> per
 /// channel, each of length periods·period), at the given lines k
