@@ -579,7 +579,6 @@ Eigen::VectorXd frf_singular_values(const FrfData& data, int r, ContinuousMethod
   return step1(data, b, r).sigma;
 }
 
-namespace {
 // The warning for an unstable estimate, or "" (issue 14: identify-frf said
 // nothing). Unstable: a pole of modulus >= 1 (discrete) or real part >= 0
 // (continuous); the worst one is named. The subspace estimate interpolates
@@ -603,7 +602,6 @@ std::string instability_warning(Domain domain, const Eigen::VectorXcd& poles) {
          (discrete ? "of modulus " + fmt(std::abs(z), 6) + " >= 1" : "with real part >= 0") +
          "; it fits the data's frequency response but must not be simulated: try another --order or --r";
 }
-}  // namespace
 
 FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMethod continuous, double omega_scale) {
   validate(d);

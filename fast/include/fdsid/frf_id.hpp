@@ -149,6 +149,10 @@ Eigen::MatrixXcd frequency_response(const StateSpace& model, double omega);
 /// pole gives Inf entries.
 std::vector<Eigen::MatrixXcd> frequency_response(const StateSpace& model, const Eigen::VectorXd& omega);
 
+/// The warning for an unstable model, or "": a pole of modulus >= 1
+/// (discrete) or real part >= 0 (continuous); the worst one is named.
+std::string instability_warning(Domain domain, const Eigen::VectorXcd& poles);
+
 /// Eq. (35): Σ_k Σ_j Σ_i |Y − G U|²_i / σ²_i over all frequencies and columns.
 double v_sub(const StateSpace& model, const FrfData& data);
 

@@ -1,0 +1,532 @@
+// Maximum-likelihood refinement of a subspace estimate (issue 15): the real
+// modal parametrisation, its residuals and analytic Jacobian, Levenberg–
+// Marquardt by Ceres Solver, and the Cramér–Rao bound at the optimum.
+#include "fdsid/refine.hpp"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
+#include <cmath>
+
+#include "fdsid/error.hpp"
+#include "fdsid/format.hpp"
+
+namespace fdsid {
+
+const char* to_string(RefineNoise n) {
+  switch (n) {
+    case RefineNoise::Known: return "known_variance";
+    case RefineNoise::Sample: return "sample_variance";
+    case RefineNoise::None: return "unit_weights";
+  }
+  return "?";
+}
+
+namespace {
+
+[[noreturn]] void fail(ErrorKind kind, const std::string& what) { throw Error(kind, "refine", what); }
+
+/// Stability margin of the bounds (refine.hpp: why 1e-8).
+constexpr double kStabilityMargin = 1e-8;
+
+/// A model in real modal form: A block diagonal with 1×1 real poles and 2×2
+/// blocks [a b; −b a] (b > 0), in state order; `sizes` lists the blocks.
+struct Modal {
+  StateSpace model;
+  std::vector<int> sizes;
+};
+
+/// T⁻¹ A T block diagonal from the eigenvectors: for λ = a + jb with
+/// A v = λ v, A [Re v, Im v] = [Re v, Im v][a b; −b a]. Each mode's columns
+/// of T are scaled so that ‖B_i‖_F = ‖C_i‖_F (the gauge chosen to balance
+/// the Jacobian's columns).
+Modal modal_form(const StateSpace& m) {
+  const int n = m.order();
+  Eigen::EigenSolver<Eigen::MatrixXd> es(m.A);
+  if (es.info() != Eigen::Success) fail(ErrorKind::Numerical, "the eigenvalues of A did not converge");
+  const Eigen::VectorXcd lam = es.eigenvalues();
+  const Eigen::MatrixXcd V = es.eigenvectors();
+  Modal out;
+  out.model = m;
+  Eigen::MatrixXd T(n, n), A = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0, col = 0; i < n;) {
+    if (lam(i).imag() == 0) {  // Eigen returns real eigenvalues with an exactly zero imaginary part
+      T.col(col) = V.col(i).real();
+      A(col, col) = lam(i).real();
+      out.sizes.push_back(1);
+      col += 1;
+      i += 1;
+    } else {  // a conjugate pair, consecutive in Eigen's output
+      cplx l = lam(i);
+      Eigen::VectorXcd v = V.col(i);
+      if (l.imag() < 0) {
+        l = std::conj(l);
+        v = v.conjugate();
+      }
+      T.col(col) = v.real();
+      T.col(col + 1) = v.imag();
+      A.block(col, col, 2, 2) << l.real(), l.imag(), -l.imag(), l.real();
+      out.sizes.push_back(2);
+      col += 2;
+      i += 2;
+    }
+  }
+  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(T).singularValues();
+  // κ(T) > 1e8: the modal form loses more than half of double's digits
+  // (u κ > 1e-8); (nearly) repeated poles have no well-conditioned modal form.
+  if (!(sv(n - 1) > 1e-8 * sv(0)))
+    fail(ErrorKind::Numerical, "the starting model's eigenvectors are (nearly) dependent (condition " +
+                                   sci(sv(0) / sv(n - 1)) + " > 1e8): repeated poles have no modal form; try another order");
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(T);
+  out.model.A = A;
+  out.model.B = qr.solve(m.B);
+  out.model.C = m.C * T;
+  for (int i = 0, s = 0; i < static_cast<int>(out.sizes.size()); s += out.sizes[i], ++i) {
+    const int z = out.sizes[i];
+    const double nb = out.model.B.middleRows(s, z).norm(), nc = out.model.C.middleCols(s, z).norm();
+    if (nb > 0 && nc > 0) {
+      const double alpha = std::sqrt(nb / nc);
+      out.model.B.middleRows(s, z) /= alpha;
+      out.model.C.middleCols(s, z) *= alpha;
+    }
+  }
+  return out;
+}
+
+/// The pole of a mode (the member with Im ≥ 0) from its block.
+cplx mode_pole(const Eigen::MatrixXd& A, int s, int z) {
+  return z == 1 ? cplx(A(s, s), 0) : cplx(A(s, s), A(s, s + 1));
+}
+
+bool unstable(Domain d, cplx pole) { return d == Domain::Discrete ? std::abs(pole) >= 1 : pole.real() >= 0; }
+
+/// Layout of θ: per mode its pole parameters (1, or 2: (a, b) continuous,
+/// (ρ, φ) discrete), B_i row-major (z × m), C_i column-major (p × z); then
+/// D column-major (p × m). Continuous time in s̃ = s/ω_s: Ã = A/ω_s, B̃ = B/ω_s.
+struct Layout {
+  Domain domain = Domain::Discrete;
+  double scale = 1;  ///< ω_s (continuous), 1 (discrete)
+  int n = 0, m = 0, p = 0;
+  std::vector<int> sizes, state, offset;  ///< per mode: size, first state, first parameter
+  int d_offset = 0, count = 0;
+
+  Layout(const Modal& md, double omega_scale) : domain(md.model.domain), sizes(md.sizes) {
+    scale = domain == Domain::Continuous ? omega_scale : 1.0;
+    n = md.model.order();
+    m = md.model.inputs();
+    p = md.model.outputs();
+    int s = 0, o = 0;
+    for (int z : sizes) {
+      state.push_back(s);
+      offset.push_back(o);
+      s += z;
+      o += z + z * m + p * z;
+    }
+    d_offset = o;
+    count = o + p * m;
+  }
+  int gauge() const {
+    int g = 0;
+    for (int z : sizes) g += z == 1 ? 1 : 2;
+    return g;
+  }
+
+  Eigen::VectorXd pack(const StateSpace& md) const {
+    Eigen::VectorXd th(count);
+    for (size_t i = 0; i < sizes.size(); ++i) {
+      const int z = sizes[i], s = state[i];
+      int o = offset[i];
+      if (z == 1) {
+        th(o++) = md.A(s, s) / scale;
+      } else if (domain == Domain::Continuous) {
+        th(o++) = md.A(s, s) / scale;
+        th(o++) = md.A(s, s + 1) / scale;
+      } else {
+        th(o++) = std::hypot(md.A(s, s), md.A(s, s + 1));
+        th(o++) = std::atan2(md.A(s, s + 1), md.A(s, s));
+      }
+      for (int q = 0; q < z; ++q)
+        for (int l = 0; l < m; ++l) th(o++) = md.B(s + q, l) / scale;
+      for (int q = 0; q < z; ++q)
+        for (int r = 0; r < p; ++r) th(o++) = md.C(r, s + q);
+    }
+    for (int l = 0; l < m; ++l)
+      for (int r = 0; r < p; ++r) th(d_offset + l * p + r) = md.D(r, l);
+    return th;
+  }
+
+  /// The 2×2 (or 1×1) block of mode i in s̃ (continuous) or z (discrete).
+  Eigen::Matrix2d block(const double* th, int i) const {
+    const int o = offset[i];
+    Eigen::Matrix2d a = Eigen::Matrix2d::Zero();
+    if (sizes[i] == 1) {
+      a(0, 0) = th[o];
+    } else if (domain == Domain::Continuous) {
+      a << th[o], th[o + 1], -th[o + 1], th[o];
+    } else {
+      const double c = std::cos(th[o + 1]), s = std::sin(th[o + 1]);
+      a << th[o] * c, th[o] * s, -th[o] * s, th[o] * c;
+    }
+    return a;
+  }
+  /// ∂(block)/∂(pole parameter t) for t = 0, 1.
+  Eigen::Matrix2d block_derivative(const double* th, int i, int t) const {
+    Eigen::Matrix2d e = Eigen::Matrix2d::Zero();
+    if (sizes[i] == 1) {
+      e(0, 0) = 1;
+    } else if (domain == Domain::Continuous) {
+      if (t == 0) e << 1, 0, 0, 1;
+      else e << 0, 1, -1, 0;
+    } else {
+      const double rho = th[offset[i]], c = std::cos(th[offset[i] + 1]), s = std::sin(th[offset[i] + 1]);
+      if (t == 0) e << c, s, -s, c;
+      else e << -rho * s, rho * c, -rho * c, -rho * s;
+    }
+    return e;
+  }
+
+  StateSpace unpack(const double* th, const StateSpace& like) const {
+    StateSpace md = like;
+    md.A = Eigen::MatrixXd::Zero(n, n);
+    md.B.resize(n, m);
+    md.C.resize(p, n);
+    md.D.resize(p, m);
+    for (size_t i = 0; i < sizes.size(); ++i) {
+      const int z = sizes[i], s = state[i];
+      md.A.block(s, s, z, z) = block(th, static_cast<int>(i)).topLeftCorner(z, z) * scale;
+      int o = offset[i] + z;
+      for (int q = 0; q < z; ++q)
+        for (int l = 0; l < m; ++l) md.B(s + q, l) = th[o++] * scale;
+      for (int q = 0; q < z; ++q)
+        for (int r = 0; r < p; ++r) md.C(r, s + q) = th[o++];
+    }
+    for (int l = 0; l < m; ++l)
+      for (int r = 0; r < p; ++r) md.D(r, l) = th[d_offset + l * p + r];
+    return md;
+  }
+
+  /// Whitened residuals r = (Y − G U)/σ, real and imaginary parts, in the
+  /// order (k, column j, output o), and (when J is not null) their Jacobian,
+  /// row-major (rows × count). dG for the pole parameters: C_i M_i E M_i B_i
+  /// with M_i = (ξI − A_i)⁻¹ and E = ∂A_i/∂θ; for B_i(q, l): W_i(:, q) e_lᵀ
+  /// with W_i = C_i M_i; for C_i(o, q): e_o (M_i B_i)(q, :); for D(o, l): e_o e_lᵀ.
+  bool evaluate(const FrfData& d, const double* th, double* r, double* J) const {
+    const int c = d.columns(), modes = static_cast<int>(sizes.size());
+    if (J) std::fill(J, J + static_cast<size_t>(rows(d)) * count, 0.0);
+    std::vector<Eigen::Matrix2cd> M(modes);
+    std::vector<Eigen::MatrixXcd> XU(modes), W(modes);
+    for (int k = 0; k < d.frequencies(); ++k) {
+      const cplx xi = domain == Domain::Discrete ? std::polar(1.0, d.omega(k)) : cplx(0.0, d.omega(k) / scale);
+      const Eigen::MatrixXcd& U = d.U[k];
+      Eigen::MatrixXcd G(p, m);
+      for (int l = 0; l < m; ++l)
+        for (int o = 0; o < p; ++o) G(o, l) = th[d_offset + l * p + o];
+      for (int i = 0; i < modes; ++i) {
+        const int z = sizes[i];
+        const Eigen::Matrix2d a = block(th, i);
+        Eigen::Matrix2cd& Mi = M[i];
+        if (z == 1) {
+          Mi.setZero();
+          Mi(0, 0) = 1.0 / (xi - a(0, 0));
+        } else {  // (ξI − [a b; −b a])⁻¹ = [ξ−a  b; −b  ξ−a] / ((ξ − a)² + b²)
+          const cplx t = xi - a(0, 0), det = t * t + a(0, 1) * a(0, 1);
+          Mi << t / det, a(0, 1) / det, -a(0, 1) / det, t / det;
+        }
+        Eigen::MatrixXcd B(z, m), C(p, z);
+        int o = offset[i] + z;
+        for (int q = 0; q < z; ++q)
+          for (int l = 0; l < m; ++l) B(q, l) = th[o++];
+        for (int q = 0; q < z; ++q)
+          for (int rr = 0; rr < p; ++rr) C(rr, q) = th[o++];
+        const Eigen::MatrixXcd X = Mi.topLeftCorner(z, z) * B;
+        G += C * X;
+        XU[i] = X * U;
+        W[i] = C * Mi.topLeftCorner(z, z);
+      }
+      const Eigen::MatrixXcd E = d.Y[k] - G * U;
+      for (int j = 0; j < c; ++j)
+        for (int o = 0; o < p; ++o) {
+          const size_t row = 2 * ((static_cast<size_t>(k) * c + j) * p + o);
+          const double w = 1 / std::sqrt(d.variance[k](o, j));
+          r[row] = E(o, j).real() * w;
+          r[row + 1] = E(o, j).imag() * w;
+          if (!std::isfinite(r[row]) || !std::isfinite(r[row + 1])) return false;
+        }
+      if (!J) continue;
+      // column t of the Jacobian at frequency k from dGU (p × c): −dGU/σ
+      auto put = [&](int t, int o, int j, cplx v) {
+        const size_t row = 2 * ((static_cast<size_t>(k) * c + j) * p + o);
+        const double w = 1 / std::sqrt(d.variance[k](o, j));
+        J[row * count + t] = -v.real() * w;
+        J[(row + 1) * count + t] = -v.imag() * w;
+      };
+      for (int i = 0; i < modes; ++i) {
+        const int z = sizes[i];
+        int t = offset[i];
+        for (int e = 0; e < z; ++e, ++t) {
+          const Eigen::MatrixXcd dGU = W[i] * block_derivative(th, i, e).topLeftCorner(z, z).cast<cplx>() * XU[i];
+          for (int j = 0; j < c; ++j)
+            for (int o = 0; o < p; ++o) put(t, o, j, dGU(o, j));
+        }
+        for (int q = 0; q < z; ++q)
+          for (int l = 0; l < m; ++l, ++t)
+            for (int j = 0; j < c; ++j)
+              for (int o = 0; o < p; ++o) put(t, o, j, W[i](o, q) * U(l, j));
+        for (int q = 0; q < z; ++q)
+          for (int o = 0; o < p; ++o, ++t)
+            for (int j = 0; j < c; ++j) put(t, o, j, XU[i](q, j));
+      }
+      for (int l = 0; l < m; ++l)
+        for (int o = 0; o < p; ++o)
+          for (int j = 0; j < c; ++j) put(d_offset + l * p + o, o, j, U(l, j));
+    }
+    return true;
+  }
+  int rows(const FrfData& d) const { return 2 * d.frequencies() * d.columns() * p; }
+
+  /// s (rad/s, or rad/sample for T = 1) of mode i's pole and ∂s/∂(its pole parameters).
+  std::pair<cplx, Eigen::Vector2cd> pole_in_s(const double* th, int i, double sample_time) const {
+    const int o = offset[i];
+    Eigen::Vector2cd ds = Eigen::Vector2cd::Zero();
+    if (domain == Domain::Continuous) {
+      ds << scale, sizes[i] == 2 ? cplx(0, scale) : cplx(0);
+      return {scale * (sizes[i] == 1 ? cplx(th[o]) : cplx(th[o], th[o + 1])), ds};
+    }
+    const double T = sample_time > 0 ? sample_time : 1.0;
+    if (sizes[i] == 1) {  // s = log λ / T (principal branch: λ < 0 gives Im s = π/T)
+      ds << 1.0 / (th[o] * T), 0.0;
+      return {std::log(cplx(th[o])) / T, ds};
+    }
+    ds << 1.0 / (th[o] * T), cplx(0, 1.0 / T);
+    return {cplx(std::log(th[o]), th[o + 1]) / T, ds};
+  }
+};
+
+class MlCost final : public ceres::CostFunction {
+ public:
+  MlCost(const FrfData& d, const Layout& l) : d_(d), l_(l) {
+    set_num_residuals(l.rows(d));
+    mutable_parameter_block_sizes()->push_back(l.count);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    return l_.evaluate(d_, parameters[0], residuals, jacobians ? jacobians[0] : nullptr);
+  }
+
+ private:
+  const FrfData& d_;
+  const Layout& l_;
+};
+
+void check_shapes(const FrfData& d, const StateSpace& start) {
+  validate(d);
+  validate(start, "starting model");
+  if (start.order() < 1) fail(ErrorKind::Input, "the starting model has order 0: nothing to refine");
+  if (start.inputs() != d.inputs() || start.outputs() != d.outputs())
+    fail(ErrorKind::Input, "the starting model has " + std::to_string(start.outputs()) + " outputs and " +
+                               std::to_string(start.inputs()) + " inputs, the data " + std::to_string(d.outputs()) +
+                               " and " + std::to_string(d.inputs()));
+  if (start.domain != d.domain) fail(ErrorKind::Input, "the starting model's domain is not the data's");
+}
+
+double omega_scale(const FrfData& d) {
+  return d.domain == Domain::Continuous ? std::sqrt(d.omega.minCoeff() * d.omega.maxCoeff()) : 1.0;
+}
+
+Eigen::MatrixXd jacobian(const FrfData& d, const Layout& l, const Eigen::VectorXd& th, Eigen::VectorXd& r) {
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(l.rows(d), l.count);
+  r.resize(l.rows(d));
+  l.evaluate(d, th.data(), r.data(), J.data());
+  return J;
+}
+
+}  // namespace
+
+StateSpace reflect_unstable_poles(const FrfData& data, const StateSpace& model, std::vector<cplx>* reflected) {
+  const Eigen::VectorXcd lam = poles(model);
+  bool any = false;
+  for (Eigen::Index i = 0; i < lam.size(); ++i) any = any || unstable(model.domain, lam(i));
+  if (!any) return model;
+  Modal md = modal_form(model);
+  const double ws = omega_scale(data);
+  for (int i = 0, s = 0; i < static_cast<int>(md.sizes.size()); s += md.sizes[i], ++i) {
+    const int z = md.sizes[i];
+    const cplx pole = mode_pole(md.model.A, s, z);
+    if (!unstable(model.domain, pole)) continue;
+    if (reflected) reflected->push_back(pole);
+    Eigen::Block<Eigen::MatrixXd> a = md.model.A.block(s, s, z, z);
+    if (model.domain == Domain::Continuous) {  // s → −s̄: the real part changes sign (and leaves the margin)
+      const double re = -std::max(std::abs(pole.real()), kStabilityMargin * ws);
+      for (int q = 0; q < z; ++q) a(q, q) = re;
+    } else {  // z → 1/z̄: the modulus inverts
+      const double rho = std::min(1 / std::abs(pole), 1 - kStabilityMargin);
+      a *= rho / std::abs(pole);
+    }
+  }
+  StateSpace out = fit_input_matrices(data, md.model.A, md.model.C);
+  out.domain = model.domain;
+  out.sample_time = model.sample_time;
+  return out;
+}
+
+RefineResult refine_ml(const FrfData& data, const StateSpace& given, const RefineOptions& opt) {
+  check_shapes(data, given);
+  if (opt.noise == RefineNoise::Sample && opt.periods < 4)
+    fail(ErrorKind::Input, "the sample ML estimator needs M >= 4 periods (the variance of its cost is finite from M = 4)");
+  RefineResult res;
+  res.cost_subspace = v_sub(given, data);
+  res.start = opt.allow_unstable ? given : reflect_unstable_poles(data, given, &res.reflected);
+  res.cost_start = v_sub(res.start, data);
+  const Modal md = modal_form(res.start);
+  const Layout lay(md, omega_scale(data));
+  Eigen::VectorXd th = lay.pack(md.model);
+
+  MlCost cost(data, lay);
+  ceres::Problem::Options po;
+  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(po);
+  problem.AddResidualBlock(&cost, nullptr, th.data());
+  const double hi = 1 - kStabilityMargin;
+  if (!opt.allow_unstable)
+    for (size_t i = 0; i < lay.sizes.size(); ++i) {
+      const int o = lay.offset[i];
+      if (lay.domain == Domain::Continuous) {
+        th(o) = std::min(th(o), -kStabilityMargin);
+        problem.SetParameterUpperBound(th.data(), o, -kStabilityMargin);
+      } else if (lay.sizes[i] == 1) {
+        th(o) = std::clamp(th(o), -hi, hi);
+        problem.SetParameterLowerBound(th.data(), o, -hi);
+        problem.SetParameterUpperBound(th.data(), o, hi);
+      } else {
+        th(o) = std::min(th(o), hi);
+        problem.SetParameterLowerBound(th.data(), o, 0.0);
+        problem.SetParameterUpperBound(th.data(), o, hi);
+      }
+    }
+  ceres::Solver::Options so;
+  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = opt.max_iterations;
+  so.function_tolerance = 1e-14;   // ≈ 50 u: relative cost changes below are the rounding of V's sum
+  so.parameter_tolerance = 1e-12;  // relative step: ≈ 5e3 u, below what the data determine
+  so.gradient_tolerance = 0;       // no absolute gradient test: V's scale is the data's
+  so.logging_type = ceres::SILENT;
+  so.minimizer_progress_to_stdout = false;
+  so.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  if (summary.termination_type == ceres::FAILURE || !th.allFinite())
+    fail(ErrorKind::Numerical, "Levenberg-Marquardt failed: " + summary.message);
+  res.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  res.termination = summary.termination_type == ceres::CONVERGENCE ? "convergence"
+                    : summary.termination_type == ceres::NO_CONVERGENCE ? "no_convergence"
+                                                                         : "stopped";
+  res.model = lay.unpack(th.data(), res.start);
+  res.cost = v_sub(res.model, data);
+
+  // Goodness of fit (refine.hpp).
+  res.terms = data.frequencies() * data.outputs() * data.columns();
+  res.parameters = lay.count;
+  res.free_parameters = lay.count - lay.gauge();
+  const double dof_terms = res.terms - 0.5 * res.free_parameters;
+  if (opt.noise == RefineNoise::Known && dof_terms > 0) {
+    res.expected_cost = dof_terms;
+    res.p_value = boost::math::cdf(boost::math::complement(boost::math::chi_squared(2 * dof_terms), 2 * res.cost));
+  } else if (opt.noise == RefineNoise::Sample && dof_terms > 0) {
+    const double dd = 2.0 * opt.periods - 2, mean = dd / (dd - 2), var = dd * dd * dd / ((dd - 2) * (dd - 2) * (dd - 4));
+    res.expected_cost = dof_terms * mean;
+    const double z = (res.cost - res.expected_cost) / std::sqrt(dof_terms * var);
+    res.p_value = z > 0 ? 1 / (1 + z * z) : 1.0;
+    res.p_is_bound = true;
+  }
+
+  // Cramér–Rao bound: Cov = ½ (JᵀJ)⁺ on the rank q = count − gauge.
+  Eigen::VectorXd r;
+  const Eigen::MatrixXd J = jacobian(data, lay, th, r);
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  const int q = res.free_parameters;
+  if (opt.noise != RefineNoise::None) {
+    res.covariance = Eigen::MatrixXd::Zero(lay.count, lay.count);
+    for (int i = 0; i < q; ++i)
+      res.covariance += svd.matrixV().col(i) * svd.matrixV().col(i).transpose() / (2 * sv(i) * sv(i));
+    // SML: the covariance is (M − 2)/(M − 3) times the ML one (Schoukens et al. 1997).
+    if (opt.noise == RefineNoise::Sample) res.covariance *= (opt.periods - 2.0) / (opt.periods - 3.0);
+    // 1e-10: the determined directions must stand out of the gauge's null
+    // space (singular values ~u σ_1) by more than half of double's digits.
+    if (q > 0 && !(sv(q - 1) > 1e-10 * sv(0)))
+      res.warnings.push_back("the data do not determine every parameter of the order-" + std::to_string(lay.n) +
+                             " model (a singular value of the Jacobian " + sci(sv(q - 1) / sv(0)) +
+                             " of the largest beyond the modal gauge): the order may be too high and the uncertainties are unreliable");
+  }
+
+  // Poles with their standard deviations.
+  for (size_t i = 0; i < lay.sizes.size(); ++i) {
+    PoleUncertainty pu;
+    const int o = lay.offset[i], z = lay.sizes[i];
+    pu.pole = mode_pole(res.model.A, lay.state[i], z);
+    const auto [s, ds] = lay.pole_in_s(th.data(), static_cast<int>(i), res.model.sample_time);
+    const double w = std::abs(s);
+    pu.frequency = w;
+    pu.damping = w > 0 ? -s.real() / w : 1.0;
+    if (res.covariance.size() > 0 && w > 0) {
+      Eigen::Vector2d gw = Eigen::Vector2d::Zero(), gz = Eigen::Vector2d::Zero();
+      for (int t = 0; t < z; ++t) {
+        gw(t) = (std::conj(s) * ds(t)).real() / w;
+        gz(t) = -ds(t).real() / w + s.real() * gw(t) / (w * w);
+      }
+      const Eigen::MatrixXd C = res.covariance.block(o, o, z, z);
+      pu.frequency_sd = std::sqrt(std::max(0.0, gw.head(z).dot(C * gw.head(z))));
+      pu.damping_sd = std::sqrt(std::max(0.0, gz.head(z).dot(C * gz.head(z))));
+    }
+    const bool on_bound = !opt.allow_unstable &&
+                          (lay.domain == Domain::Continuous ? th(o) >= -kStabilityMargin * (1 + 1e-6)
+                                                            : std::abs(th(o)) >= hi * (1 - 1e-12));
+    res.at_stability_bound = res.at_stability_bound || on_bound;
+    res.poles.push_back(pu);
+  }
+  if (res.at_stability_bound)
+    res.warnings.push_back("a pole of the refined model sits on the stability margin (the constraint is active): the data "
+                           "favour an unstable or undamped pole there; the model is the best stable one, and an effect "
+                           "the model lacks or another order may explain the data better");
+  if (res.termination != "convergence")
+    res.warnings.push_back("the refinement stopped after " + std::to_string(res.iterations) +
+                           " iterations without converging (" + summary.message + ")");
+  if (opt.allow_unstable) {
+    const std::string w = instability_warning(res.model.domain, poles(res.model));
+    if (!w.empty()) res.warnings.push_back(w);
+  }
+
+  // |G| and ∠G standard deviations: the Jacobian of G from the same residuals
+  // with U = I, Y = 0, σ = 1 (then r = −G and its Jacobian is −∂G/∂θ).
+  if (res.covariance.size() > 0) {
+    FrfData unit = data;
+    const int m = data.inputs(), p = data.outputs();
+    for (int k = 0; k < data.frequencies(); ++k) {
+      unit.U[k] = Eigen::MatrixXcd::Identity(m, m);
+      unit.Y[k] = Eigen::MatrixXcd::Zero(p, m);
+      unit.variance[k] = Eigen::MatrixXd::Ones(p, m);
+    }
+    Eigen::VectorXd g;
+    const Eigen::MatrixXd JG = jacobian(unit, lay, th, g);
+    res.magnitude_sd.assign(data.frequencies(), Eigen::MatrixXd::Zero(p, m));
+    res.phase_sd = res.magnitude_sd;
+    for (int k = 0; k < data.frequencies(); ++k)
+      for (int j = 0; j < m; ++j)
+        for (int o = 0; o < p; ++o) {
+          const Eigen::Index row = 2 * ((static_cast<Eigen::Index>(k) * m + j) * p + o);
+          const cplx G(-g(row), -g(row + 1));
+          const double a = std::abs(G);
+          if (!(a > 0)) continue;
+          // ∂|G| = Re(Ḡ ∂G)/|G|, ∂∠G = Im(Ḡ ∂G)/|G|², ∂G = −(J_re + j J_im)
+          const Eigen::RowVectorXd dre = -JG.row(row), dim = -JG.row(row + 1);
+          const Eigen::RowVectorXd dmag = (G.real() * dre + G.imag() * dim) / a;
+          const Eigen::RowVectorXd dph = (G.real() * dim - G.imag() * dre) / (a * a);
+          res.magnitude_sd[k](o, j) = std::sqrt(std::max(0.0, (dmag * res.covariance * dmag.transpose())(0, 0)));
+          res.phase_sd[k](o, j) = std::sqrt(std::max(0.0, (dph * res.covariance * dph.transpose())(0, 0)));
+        }
+  }
+  return res;
+}
+
+}  // namespace fdsid
