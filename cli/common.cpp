@@ -146,6 +146,10 @@ void add_record_selection_options(CLI::App* sub, RecordSelection& selection) {
                   "records: drop this many leading periods (a transient); the meta's periods are reduced by it")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  sub->add_option("--use-periods", selection.use_periods,
+                  "records: after the skipped periods use only this many (e.g. --skip-periods 1 --use-periods 4: "
+                  "periods 2-5; the rest can validate); default all")
+      ->check(CLI::PositiveNumber);
 }
 
 void add_frequency_unit_options(CLI::App* sub, FrequencyUnits& units) {

@@ -406,16 +406,18 @@ void read_selection(const json& src, const FrfCheckRequest& q, RecordSettings& s
     if (src.contains("input_columns")) json_sel.inputs = src["input_columns"].get<std::vector<std::string>>();
     if (src.contains("output_columns")) json_sel.outputs = src["output_columns"].get<std::vector<std::string>>();
     if (src.contains("skip_periods")) json_sel.skip_periods = src["skip_periods"].get<int>();
+    if (src.contains("use_periods")) json_sel.use_periods = src["use_periods"].get<int>();
   } catch (const json::exception&) {
     throw Error(ErrorKind::Input, q.model_path + " field \"source\"",
-                "input_columns/output_columns must be arrays of names, skip_periods an integer");
+                "input_columns/output_columns must be arrays of names, skip_periods and use_periods integers");
   }
   if (q.selection.empty()) {
     s.selection = json_sel;
   } else {
     if (!json_sel.empty() && (json_sel.inputs != q.selection.inputs || json_sel.outputs != q.selection.outputs ||
-                              json_sel.skip_periods != q.selection.skip_periods))
-      throw Error(ErrorKind::Input, "--input/--output/--skip-periods",
+                              json_sel.skip_periods != q.selection.skip_periods ||
+                              json_sel.use_periods != q.selection.use_periods))
+      throw Error(ErrorKind::Input, "--input/--output/--skip-periods/--use-periods",
                   "contradict the candidate's \"source\" (" + src.dump() +
                       "); drop the options: check repeats what the candidate JSON says it did");
     s.selection = q.selection;

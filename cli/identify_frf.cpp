@@ -1,6 +1,7 @@
 // fdsid identify-frf: frequency-domain subspace identification from FRF
 // samples or periodic input/output records (Pintelon 2002).
 #include <algorithm>
+#include <limits>
 #include <memory>
 
 #include "common.hpp"
@@ -8,6 +9,7 @@
 #include "fdsid/figures.hpp"
 #include "fdsid/io.hpp"
 #include "fdsid/json.hpp"
+#include "fdsid/refine.hpp"
 #include "fdsid/workflow.hpp"
 #include "high_precision.hpp"
 
@@ -24,10 +26,119 @@ struct IdentifyFrfCommand {
   EivVariance eiv_variance = EivVariance::Data;
   double min_input_snr = 10;
   bool eiv = false, improper = false, strict = false;
+  bool refine = false;          ///< --refine ml: maximum-likelihood refinement of the subspace estimate (issue 15)
+  bool allow_unstable = false;  ///< keep unstable poles (else reflected into the stable region)
   RecordSelection selection;
   FrequencyUnits units;  ///< --frequency-unit, --sample-time (FRF files)
   std::vector<double> noise_std;  ///< --noise-std: known output noise (records), else the sample variance
 };
+
+// The noise model the data's variances stand for (RefineNoise).
+RefineOptions refine_options(const IdentifyFrfCommand& c, const FrfData& data, const FrfSource& source) {
+  RefineOptions o;
+  o.allow_unstable = c.allow_unstable;
+  if (!c.frf_path.empty()) {
+    o.noise = data.has_noise_model ? RefineNoise::Known : RefineNoise::None;
+  } else if (!c.noise_std.empty()) {
+    o.noise = RefineNoise::Known;
+  } else {
+    o.noise = RefineNoise::Sample;
+    o.periods = source.periods;
+  }
+  return o;
+}
+
+// The warnings about the subspace estimate's poles and rounding, once the model
+// written is another (reflected or refined): they are recomputed for it.
+void drop_subspace_model_warnings(FrfResult& res, bool refined) {
+  auto stale = [refined](const std::string& w) {
+    return w.rfind("the identified model is unstable", 0) == 0 || w.rfind("pole pair ", 0) == 0 ||
+           (refined && (w.rfind("double precision may have lost", 0) == 0 || w.rfind("UNUSABLE in double", 0) == 0));
+  };
+  res.warnings.erase(std::remove_if(res.warnings.begin(), res.warnings.end(), stale), res.warnings.end());
+}
+
+std::string pole_text(cplx z) {
+  return fmt(z.real(), 6) + (z.imag() < 0 ? "-" : "+") + fmt(std::abs(z.imag()), 6) + "j";
+}
+
+std::string reflected_note(const std::vector<cplx>& reflected, Domain domain) {
+  std::string s;
+  for (const cplx z : reflected) s += (s.empty() ? "" : ", ") + pole_text(z);
+  return "unstable subspace pole(s) " + s + " reflected into the stable region (" +
+         (domain == Domain::Discrete ? "z -> 1/conj(z)" : "s -> -conj(s)") +
+         ") and B, D refitted; --allow-unstable keeps them";
+}
+
+nlohmann::json refinement_json(const RefineResult& r, RefineNoise noise) {
+  using nlohmann::json;
+  json j = {{"method", "ml"},
+            {"noise_model", to_string(noise)},
+            {"parametrisation", "real modal form: 2x2 blocks [a b; -b a] per pole pair (discrete: polar rho, phi), "
+                                "1x1 real poles, B, C, D free; continuous time in s / omega_scale"},
+            {"solver", "Ceres Solver, Levenberg-Marquardt, dense QR, analytic Jacobian"},
+            {"cost_subspace", r.cost_subspace},
+            {"cost_start", r.cost_start},
+            {"cost", r.cost},
+            {"terms", r.terms},
+            {"parameters", r.parameters},
+            {"free_parameters", r.free_parameters},
+            {"iterations", r.iterations},
+            {"termination", r.termination},
+            {"at_stability_bound", r.at_stability_bound}};
+  if (noise != RefineNoise::None) {
+    j["expected_cost"] = r.expected_cost;
+    j["p_value"] = r.p_value;
+    j["p_value_method"] = r.p_is_bound ? "Cantelli bound on the sample-variance law" : "chi-square(2T - q) tail";
+  }
+  j["reflected_poles"] = json::array();
+  for (const cplx z : r.reflected) j["reflected_poles"].push_back({z.real(), z.imag()});
+  j["poles"] = json::array();
+  for (const PoleUncertainty& p : r.poles) {
+    json q = {{"pole", {p.pole.real(), p.pole.imag()}}, {"frequency", p.frequency}, {"damping", p.damping}};
+    if (noise != RefineNoise::None) {
+      q["frequency_sd"] = p.frequency_sd;
+      q["damping_sd"] = p.damping_sd;
+    }
+    j["poles"].push_back(q);
+  }
+  if (!r.magnitude_sd.empty()) {
+    auto mats = [](const std::vector<Eigen::MatrixXd>& v) {
+      json a = json::array();
+      for (const Eigen::MatrixXd& M : v) {
+        json rows = json::array();
+        for (Eigen::Index i = 0; i < M.rows(); ++i) {
+          json row = json::array();
+          for (Eigen::Index k = 0; k < M.cols(); ++k) row.push_back(M(i, k));
+          rows.push_back(row);
+        }
+        a.push_back(rows);
+      }
+      return a;
+    };
+    j["magnitude_sd"] = mats(r.magnitude_sd);
+    j["phase_sd"] = mats(r.phase_sd);
+  }
+  j["warnings"] = r.warnings;
+  return j;
+}
+
+void print_refinement(Out& out, const RefineResult& r, RefineNoise noise, Domain domain, double sample_time) {
+  out << "refined by maximum likelihood (" << to_string(noise) << "): V " << sci(r.cost_subspace) << " -> " << sci(r.cost)
+      << " in " << r.iterations << " iterations";
+  if (noise != RefineNoise::None)
+    out << "; expected " << fmt(r.expected_cost, 5) << " under a right model, p " << (r.p_is_bound ? "<= " : "= ")
+        << sci(r.p_value, 2);
+  out << "\n";
+  const std::string unit = domain == Domain::Continuous || sample_time != 1.0 ? "rad/s" : "rad/sample";
+  for (const PoleUncertainty& p : r.poles) {
+    out << "  pole " << pole_text(p.pole) << ": frequency " << fmt(p.frequency, 6);
+    if (noise != RefineNoise::None) out << " +- " << sci(p.frequency_sd, 2);
+    out << " " << unit << ", damping " << fmt(p.damping, 5);
+    if (noise != RefineNoise::None) out << " +- " << sci(p.damping_sd, 2);
+    out << "\n";
+  }
+}
 
 // --precision high: the reference identifies for a given order and r; the
 // automatic choices (Section 5) are made once, in double precision, and reported.
@@ -88,6 +199,12 @@ int run(const IdentifyFrfCommand& c) {
                 "the 50-digit reference reads records with their sample variance only; drop --precision high "
                 "(or give M >= 4 periods without --noise-std)");
   if (c.options.r < 0 || c.options.r_max < 0) throw Error(ErrorKind::Input, "--r", "must be positive");
+  if (c.refine && (c.eiv || c.improper))
+    throw Error(ErrorKind::Input, "--refine ml",
+                "refines with output noise only; the errors-in-variables ML estimator (noisy input) is not implemented: "
+                "drop --eiv/--improper to refine the output-error model");
+  if (c.refine && c.precision == Precision::High)
+    throw Error(ErrorKind::Input, "--refine ml", "refines the double-precision estimate; not with --precision high");
   refuse_overwrite(c.plot_path, {c.frf_path, c.data_path, c.meta_path, c.json_path}, "--plot");
   refuse_overwrite(c.json_path, {c.frf_path, c.data_path, c.meta_path}, "--json");
   Out out{c.json_path == "-"};
@@ -144,6 +261,49 @@ int run(const IdentifyFrfCommand& c) {
   } catch (const Error& e) {
     throw e.within(where);
   }
+  // Stable models (issue 15): unstable subspace poles are reflected, and the
+  // refinement keeps them stable, unless --allow-unstable.
+  const RefineOptions ro = refine_options(c, data, source);
+  RefineResult refined;
+  std::string stabilised;
+  try {
+    if (c.refine) {
+      refined = refine_ml(data, res.model, ro);
+      res.model = refined.model;
+      res.v_sub = refined.cost;
+      if (!refined.reflected.empty()) stabilised = reflected_note(refined.reflected, res.model.domain);
+    } else if (!c.allow_unstable) {
+      std::vector<cplx> reflected;
+      const StateSpace s = reflect_unstable_poles(data, res.model, &reflected);
+      if (!reflected.empty()) {
+        res.model = s;
+        res.v_sub = v_sub(s, data);
+        stabilised = reflected_note(reflected, res.model.domain);
+      }
+    }
+  } catch (const Error& e) {
+    throw e.within(where);
+  }
+  if (c.refine || !stabilised.empty()) {
+    res.poles = poles(res.model);
+    drop_subspace_model_warnings(res, c.refine);
+    if (c.refine) {  // the ML optimum does not inherit the subspace estimate's rounding; its own: u κ(J)
+      res.condition = refined.condition;
+      res.error_estimate = std::numeric_limits<double>::epsilon() / 2 * refined.condition;  // u κ
+      if (const std::string w = precision_warning(res.error_estimate, "the refined parameters",
+                                                  "condition of the Jacobian " + fmt(refined.condition, 3));
+          !w.empty())
+        res.warnings.push_back(w);
+    }
+    if (const std::string w = instability_warning(res.model.domain, res.poles); !w.empty()) res.warnings.push_back(w);
+    const double lo = data.omega.minCoeff(), hi = data.omega.maxCoeff();
+    if (const std::string w = out_of_band_warning(resonances_outside_band(res.poles, res.model.domain, lo, hi),
+                                                  res.model.domain, lo, hi, "the data's frequencies");
+        !w.empty())
+      res.warnings.push_back(w);
+    for (const std::string& w : refined.warnings)
+      if (w.rfind("the identified model is unstable", 0) != 0) res.warnings.push_back(w);
+  }
   const bool capped = o.order == 0 && res.order_at_search_cap;
   out << "identified order " << res.order
       << (o.order == 0 ? (capped ? " (the top of the searched range; see the warning)" : " (read from the singular values)")
@@ -153,6 +313,8 @@ int run(const IdentifyFrfCommand& c) {
       << (source.periods > 0 ? ", M = " + std::to_string(source.periods) + " periods" : std::string())
       << ", r = " << res.r << (o.r == 0 ? " (minimising V_SUB)" : "") << "\n";
   print_poles(out, res.poles);
+  if (!stabilised.empty()) out << "note: " << stabilised << "\n";
+  if (c.refine) print_refinement(out, refined, ro.noise, res.model.domain, res.model.sample_time);
   const FitVerdict fit = fit_verdict(res, data, source);
   if (fit.misfit) res.warnings.push_back(fit.warning());
   out << fit.summary() << "\n";
@@ -161,8 +323,10 @@ int run(const IdentifyFrfCommand& c) {
   if (refused_as_unusable(c.strict, res.error_estimate)) return 1;
   nlohmann::json j = to_json(res, method, source);
   j["fit"] = to_json(fit);
+  if (c.refine) j["refinement"] = refinement_json(refined, ro.noise);
+  if (!stabilised.empty()) j["stabilised"] = stabilised;
   emit_json(c.json_path, j);
-  emit_plot(c.plot_path, plot::frf_figure(data, res));
+  emit_plot(c.plot_path, plot::frf_figure(data, res, c.refine ? &refined.magnitude_sd : nullptr));
   return 0;
 }
 
@@ -222,6 +386,13 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
                                 "output); the variance then comes from it, not from the periods, so M >= 1 period "
                                 "suffices (default: the sample variance over M >= 4 periods)");
   noise->needs(data)->excludes(eiv)->excludes(improper);
+  idf->add_option("--refine", c->refine,
+                  "ml: refine the subspace estimate by maximum likelihood (Levenberg-Marquardt, Ceres) for the data's "
+                  "noise model, with Cramer-Rao uncertainties of the poles and of G")
+      ->transform(choice(std::map<std::string, bool>{{"ml", true}, {"none", false}}, "is not ml or none"));
+  idf->add_flag("--allow-unstable", c->allow_unstable,
+                "keep unstable poles (default: reflect them into the stable region and refit B, D; a warning names "
+                "any unstable pole that remains)");
   on_parsed(idf, c, chosen, run);
 }
 

@@ -29,7 +29,7 @@ t_deps=$(date +%s)
 
 cmake -S . -B build -DFDSID_BUILD_TESTS=ON -DFDSID_BUILD_BENCH=ON
 cmake --build build -j2 --target fdsid bench_spectrum bench_frf bench_gap \
-  paper_golden_test figure_test consistency_property_test frf_consistency_property_test cli_test
+  paper_golden_test figure_test consistency_property_test frf_consistency_property_test cli_test refine_test
 t_rel_build=$(date +%s)
 ctest --test-dir build --output-on-failure -j2 -L 'slow|docs|install'
 t_rel_test=$(date +%s)

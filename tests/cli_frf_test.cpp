@@ -1332,3 +1332,69 @@ TEST_F(CliFrf, AResonanceOutsideTheExcitedBandIsNamed) {
   ASSERT_TRUE(Succeeded(all));
   EXPECT_EQ(all.out.find("outside"), std::string::npos) << all.out;
 }
+
+// ---------------------------------------------------------------------------
+// --refine ml, --allow-unstable, --use-periods (issue 15)
+
+// Records of the Pintelon plant with output noise: the refined model's JSON
+// carries the refinement (cost no larger than the subspace estimate's, the
+// sample-variance noise model of the M periods used, a fit the SML law accepts
+// at level 1e-3, stable poles with standard deviations, σ of |G| per line).
+TEST_F(CliFrf, RefineMlOnRecords) {
+  simulate(128, 8, 1e-3, "rec");
+  const RunResult r = run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"), "--order",
+                                 "4", "--r", "8", "--skip-periods", "1", "--use-periods", "6", "--refine", "ml",
+                                 "--json", path("out.json")});
+  ASSERT_TRUE(Succeeded(r)) << r.err;
+  EXPECT_NE(r.out.find("refined by maximum likelihood (sample_variance)"), std::string::npos) << r.out;
+  const json j = read_json("out.json");
+  expect_contract_fields(j, "discrete", "pintelon2002-alg1");
+  EXPECT_EQ(j["source"]["use_periods"], 6);
+  EXPECT_EQ(j["source"]["periods"], 6);
+  const json& f = j["refinement"];
+  EXPECT_EQ(f["noise_model"], "sample_variance");
+  EXPECT_LE(f["cost"].get<double>(), f["cost_subspace"].get<double>());
+  EXPECT_GE(f["p_value"].get<double>(), 1e-3);
+  EXPECT_EQ(f["poles"].size(), 2u);  // two pole pairs
+  for (const json& p : f["poles"]) {
+    EXPECT_LT(std::hypot(p["pole"][0].get<double>(), p["pole"][1].get<double>()), 1.0);
+    EXPECT_GT(p["frequency_sd"].get<double>(), 0);
+    EXPECT_GT(p["damping_sd"].get<double>(), 0);
+  }
+  EXPECT_EQ(f["magnitude_sd"].size(), 32u);  // F = 32 excited lines
+  for (const json& row : j["poles"]) EXPECT_LT(std::hypot(row[0].get<double>(), row[1].get<double>()), 1.0);
+}
+
+// Refused before any work: the errors-in-variables ML estimator is not there;
+// --use-periods beyond what remains after the skipped periods.
+TEST_F(CliFrf, RefineAndUsePeriodsRefusals) {
+  simulate(64, 6, 1e-3, "rec");
+  const std::string d = path("rec.csv"), m = path("rec.meta.json");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", d, "--meta", m, "--order", "4", "--eiv", "--refine", "ml"}),
+                         {"--refine ml", "errors-in-variables"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", d, "--meta", m, "--skip-periods", "2", "--use-periods", "5"}),
+                         {"--use-periods", "4 periods that remain"}));
+}
+
+// An FRF with an unstable pole (z = 1.25): identify-frf reflects it (z -> 1/z̄
+// = 0.8) and says so, unless --allow-unstable, which keeps it with a warning.
+TEST_F(CliFrf, UnstablePolesAreReflectedUnlessAllowed) {
+  fdsid::StateSpace u;
+  u.A = Eigen::MatrixXd::Constant(1, 1, 1.25);
+  u.B = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  u.C = Eigen::MatrixXd::Constant(1, 1, 0.3);
+  u.D = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  std::vector<double> omega;
+  for (int k = 0; k < 40; ++k) omega.push_back(M_PI * (k + 0.5) / 40);
+  const std::string f = write("g.csv", frf_csv(u, omega, 1e-8));
+  const RunResult r = run_fdsid({"identify-frf", "--frf", f, "--order", "1", "--r", "3", "--json", path("s.json")});
+  ASSERT_TRUE(Succeeded(r)) << r.err;
+  EXPECT_NE(r.out.find("note: unstable subspace pole(s) 1.25+0j reflected"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("the identified model is unstable"), std::string::npos) << r.out;
+  EXPECT_NEAR(read_json("s.json")["poles"][0][0].get<double>(), 0.8, 1e-9);
+  const RunResult a = run_fdsid({"identify-frf", "--frf", f, "--order", "1", "--r", "3", "--allow-unstable", "--json",
+                                 path("a.json")});
+  ASSERT_TRUE(Succeeded(a)) << a.err;
+  EXPECT_NE(a.out.find("warning: the identified model is unstable: pole 1.25+0j"), std::string::npos) << a.out;
+  EXPECT_NEAR(read_json("a.json")["poles"][0][0].get<double>(), 1.25, 1e-9);
+}

@@ -565,6 +565,12 @@ Records read_records(const std::string& data_path, const std::string& meta_path,
   if (skip >= r.meta.periods)
     input_error("--skip-periods", std::to_string(skip) + " leaves no period of the " + std::to_string(r.meta.periods) +
                                       " that " + meta_path + " lists");
+  const int use = selection.use_periods;
+  if (use < 0 || use > r.meta.periods - skip)
+    input_error("--use-periods", std::to_string(use) + " is not between 1 and the " +
+                                     std::to_string(r.meta.periods - skip) + " periods that remain of the " +
+                                     std::to_string(r.meta.periods) + " that " + meta_path + " lists" +
+                                     (skip > 0 ? " after --skip-periods " + std::to_string(skip) : std::string()));
   check_readable_file(data_path, "data file");
   std::ifstream f(data_path);
   if (!f) input_error(data_path, std::string("cannot open data file (") + std::strerror(errno) + ")");
@@ -576,6 +582,14 @@ Records read_records(const std::string& data_path, const std::string& meta_path,
                                  std::to_string(skip) + " drops " + std::to_string(drop));
     r.samples = Eigen::MatrixXd(r.samples.bottomRows(r.samples.rows() - drop));
     r.meta.periods -= skip;
+  }
+  if (use > 0) {
+    const Eigen::Index keep = static_cast<Eigen::Index>(use) * r.meta.period;
+    if (r.samples.rows() < keep)
+      input_error(data_path, "has " + std::to_string(r.samples.rows()) + " samples after the skipped periods; " +
+                                 "--use-periods " + std::to_string(use) + " needs " + std::to_string(keep));
+    r.samples = Eigen::MatrixXd(r.samples.topRows(keep));
+    r.meta.periods = use;
   }
   return r;
 }

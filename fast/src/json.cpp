@@ -41,6 +41,7 @@ json to_json(const FrfSource& s) {
     j["output_columns"] = s.selection.outputs;
   }
   if (s.selection.skip_periods > 0) j["skip_periods"] = s.selection.skip_periods;
+  if (s.selection.use_periods > 0) j["use_periods"] = s.selection.use_periods;
   if (s.treatment == RecordTreatment::ErrorsInVariables)
     j["errors_in_variables"] = {{"variance", s.eiv_variance == EivVariance::Model ? "Eq. (31) at the first-pass model"
                                                                                   : "Eq. (31), corrected (conj U)"},

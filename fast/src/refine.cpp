@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
+#include <limits>
 
 #include "fdsid/error.hpp"
 #include "fdsid/format.hpp"
@@ -446,6 +447,7 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
   const Eigen::BDCSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinV);
   const Eigen::VectorXd sv = svd.singularValues();
   const int q = res.free_parameters;
+  res.condition = q > 0 && sv(q - 1) > 0 ? sv(0) / sv(q - 1) : std::numeric_limits<double>::infinity();
   if (opt.noise != RefineNoise::None) {
     res.covariance = Eigen::MatrixXd::Zero(lay.count, lay.count);
     for (int i = 0; i < q; ++i)
@@ -485,6 +487,14 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
     res.at_stability_bound = res.at_stability_bound || on_bound;
     res.poles.push_back(pu);
   }
+  // The bound assumes a right model; a rejected fit (p ≤ 1e-3, FitVerdict's
+  // level) makes it too small, by about √(V / E V) if the misfit were noise-like.
+  if (opt.noise != RefineNoise::None && res.expected_cost > 0 && res.p_value <= 1e-3)
+    res.warnings.push_back("the Cramer-Rao uncertainties assume a right model, and V is " +
+                           fmt(res.cost / res.expected_cost, 3) + " times its expected value (p " +
+                           (res.p_is_bound ? "<= " : "= ") + sci(res.p_value, 2) +
+                           "): they understate the model's uncertainty (by about a factor " +
+                           fmt(std::sqrt(res.cost / res.expected_cost), 2) + " if the misfit were noise-like)");
   if (res.at_stability_bound)
     res.warnings.push_back("a pole of the refined model sits on the stability margin (the constraint is active): the data "
                            "favour an unstable or undamped pole there; the model is the best stable one, and an effect "

@@ -415,7 +415,7 @@ Figure spectrum_figure(const SpectrumData& d, const SpectrumResult& res) {
   return f;
 }
 
-Figure frf_figure(const FrfData& d, const FrfResult& res) {
+Figure frf_figure(const FrfData& d, const FrfResult& res, const std::vector<Eigen::MatrixXd>* magnitude_sd) {
   Figure f;
   f.columns = 2;
   const bool discrete = d.domain == Domain::Discrete;
@@ -544,6 +544,21 @@ Figure frf_figure(const FrfData& d, const FrfResult& res) {
     }
     resid.series.push_back(sd);
     mag.series.push_back(sd);
+  }
+  // The refined model's uncertainty (issue 15): 2 σ of |G_model| from the
+  // Cramér–Rao bound, on the residual panel, where it compares with the
+  // residual and the noise (on |G| itself it is too thin to see).
+  for (int e = 0; magnitude_sd && static_cast<int>(magnitude_sd->size()) == F && e < entries; ++e) {
+    const int i = e / mi, j = e % mi;
+    Series band;
+    band.label = "2#gs of |G#dmodel#u| (Cramer-Rao)" + (p * mi > 1 ? " #d" + std::to_string(i + 1) + std::to_string(j + 1) + "#u" : std::string());
+    band.colour = kCycle[(2 * e + 1) % 10];
+    band.width = 3;
+    for (int k = 0; k < F; ++k) {
+      band.x.push_back(d.omega(k) * hz);
+      band.y.push_back(2 * (*magnitude_sd)[k](i, j));
+    }
+    resid.series.push_back(band);
   }
   if (p * mi > entries) mag.title += " (first 4 entries)";
   mag.legend = LegendAt::BottomLeft;

@@ -79,7 +79,8 @@ std::string records_csv(const Eigen::MatrixXd& samples);
 struct RecordSelection {
   std::vector<std::string> inputs, outputs;  ///< header names; both empty: the u…, y… header of the format
   int skip_periods = 0;                      ///< leading whole periods dropped; the meta's M is reduced by it
-  bool empty() const { return inputs.empty() && outputs.empty() && skip_periods == 0; }
+  int use_periods = 0;                       ///< after the skipped ones, only this many periods (0: all the rest)
+  bool empty() const { return inputs.empty() && outputs.empty() && skip_periods == 0 && use_periods == 0; }
 };
 
 /// A records CSV read with its meta and a selection: samples (P·M rows, the
@@ -95,8 +96,8 @@ struct Records {
 /// Fails: Error(Input) naming the file: a named column not in the header (the
 /// header's names listed), --input without --output or the reverse, a name
 /// given twice, an empty or non-numeric cell in a chosen column (its line),
-/// skip_periods < 0 or ≥ the meta's periods, fewer rows than the skipped
-/// periods need.
+/// skip_periods < 0 or ≥ the meta's periods, use_periods < 0 or more than
+/// remain after the skipped ones, fewer rows than the skipped periods need.
 Records read_records(const std::string& data_path, const std::string& meta_path, const RecordSelection& selection = {});
 Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int& inputs,
                                   const RecordSelection& selection);

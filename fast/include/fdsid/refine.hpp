@@ -62,6 +62,9 @@ struct RefineResult {
   /// Cramér–Rao bound of the modal parameters: Cov = ½ (JᵀJ)⁺ with J the Jacobian of the whitened residuals
   /// (each real part of a whitened residual has variance ½), rank q; times (M−2)/(M−3) for the SML.
   Eigen::MatrixXd covariance;
+  /// κ = σ_1/σ_q of the Jacobian on the determined directions: u κ is the first-order relative
+  /// rounding error of the parameters (the Gauss–Newton normal equations solved by QR).
+  double condition = 0;
   std::vector<PoleUncertainty> poles;
   /// Standard deviation of |G_ij| and ∠G_ij (rad) at each of the data's frequencies, [k](i, j).
   std::vector<Eigen::MatrixXd> magnitude_sd, phase_sd;

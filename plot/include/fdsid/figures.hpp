@@ -38,7 +38,10 @@ Figure spectrum_figure(const SpectrumData& data, const SpectrumResult& result);
 /// identify-frf: |G| of the data and of the model, the residual beside the
 /// noise standard deviation, the singular values of step 1c with the order
 /// marked, poles and zeros (z-plane with unit circle, or s-plane).
-Figure frf_figure(const FrfData& data, const FrfResult& result);
+/// `magnitude_sd` (optional, one p × m matrix per frequency): the standard
+/// deviation of |G| of a refined model, drawn as 2σ on the residual panel.
+Figure frf_figure(const FrfData& data, const FrfResult& result,
+                  const std::vector<Eigen::MatrixXd>* magnitude_sd = nullptr);
 
 /// gap: t(k) across frequency for the model as given and after each added
 /// stage, the noise floor E t = 1 and the per-line critical value, the flagged
