@@ -58,10 +58,6 @@ void drop_subspace_model_warnings(FrfResult& res, bool refined) {
   res.warnings.erase(std::remove_if(res.warnings.begin(), res.warnings.end(), stale), res.warnings.end());
 }
 
-std::string pole_text(cplx z) {
-  return fmt(z.real(), 6) + (z.imag() < 0 ? "-" : "+") + fmt(std::abs(z.imag()), 6) + "j";
-}
-
 std::string reflected_note(const std::vector<cplx>& reflected, Domain domain) {
   std::string s;
   for (const cplx z : reflected) s += (s.empty() ? "" : ", ") + pole_text(z);
@@ -295,14 +291,14 @@ int run(const IdentifyFrfCommand& c) {
           !w.empty())
         res.warnings.push_back(w);
     }
-    if (const std::string w = instability_warning(res.model.domain, res.poles); !w.empty()) res.warnings.push_back(w);
+    // No instability warning to recompute: reflection leaves no unstable pole,
+    // the refinement keeps none, and refine_ml names those --allow-unstable kept.
     const double lo = data.omega.minCoeff(), hi = data.omega.maxCoeff();
     if (const std::string w = out_of_band_warning(resonances_outside_band(res.poles, res.model.domain, lo, hi),
                                                   res.model.domain, lo, hi, "the data's frequencies");
         !w.empty())
       res.warnings.push_back(w);
-    for (const std::string& w : refined.warnings)
-      if (w.rfind("the identified model is unstable", 0) != 0) res.warnings.push_back(w);
+    res.warnings.insert(res.warnings.end(), refined.warnings.begin(), refined.warnings.end());
   }
   const bool capped = o.order == 0 && res.order_at_search_cap;
   out << "identified order " << res.order

@@ -13,30 +13,16 @@
 #include "fdsid/reference/gap.hpp"
 #include "fdsid/simulate.hpp"
 #include "gap_systems.hpp"
+#include "reference_bridge.hpp"
 
 namespace fdsid {
 namespace {
 
 using reference::Complex;
 using reference::Real;
+using testing::to_reference;
 
 constexpr double kU = 0x1p-53;
-
-reference::Model to_reference(const StateSpace& g) {
-  // every double is exactly representable in 50 digits
-  auto conv = [](const Eigen::MatrixXd& X) {
-    reference::MatrixR R(X.rows(), X.cols());
-    for (Eigen::Index i = 0; i < X.rows(); ++i)
-      for (Eigen::Index j = 0; j < X.cols(); ++j) R(i, j) = Real(X(i, j));
-    return R;
-  };
-  reference::Model m;
-  m.A = conv(g.A);
-  m.B = conv(g.B);
-  m.C = conv(g.C);
-  m.D = conv(g.D);
-  return m;
-}
 
 struct Case {
   StateSpace truth;

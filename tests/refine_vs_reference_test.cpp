@@ -11,43 +11,12 @@
 #include "fdsid/paper.hpp"
 #include "fdsid/reference/frf_id.hpp"
 #include "fdsid/refine.hpp"
+#include "reference_bridge.hpp"
 
 namespace fdsid {
 namespace {
 
-using reference::Real;
-
-reference::MatrixR to_real(const Eigen::MatrixXd& X) {  // every double is exact in 50 digits
-  reference::MatrixR R(X.rows(), X.cols());
-  for (Eigen::Index i = 0; i < X.rows(); ++i)
-    for (Eigen::Index j = 0; j < X.cols(); ++j) R(i, j) = Real(X(i, j));
-  return R;
-}
-
-reference::Model to_reference(const StateSpace& g) {
-  reference::Model m;
-  m.domain = g.domain == Domain::Discrete ? "discrete" : "continuous";
-  m.A = to_real(g.A);
-  m.B = to_real(g.B);
-  m.C = to_real(g.C);
-  m.D = to_real(g.D);
-  return m;
-}
-
-reference::FrfData to_reference(const FrfData& d) {
-  reference::FrfData r;
-  r.domain = d.domain == Domain::Discrete ? "discrete" : "continuous";
-  for (int k = 0; k < d.frequencies(); ++k) {
-    r.omega.push_back(Real(d.omega(k)));
-    reference::MatrixC U(d.U[k].rows(), d.U[k].cols()), Y(d.Y[k].rows(), d.Y[k].cols());
-    for (Eigen::Index i = 0; i < U.size(); ++i) U(i) = reference::Complex(Real(d.U[k](i).real()), Real(d.U[k](i).imag()));
-    for (Eigen::Index i = 0; i < Y.size(); ++i) Y(i) = reference::Complex(Real(d.Y[k](i).real()), Real(d.Y[k](i).imag()));
-    r.U.push_back(U);
-    r.Y.push_back(Y);
-    r.variance.push_back(to_real(d.variance[k]));
-  }
-  return r;
-}
+using testing::to_reference;
 
 // ‖J‖_F of the whitened residuals r = (Y − G U)/σ in the entries of A, B, C,
 // D (real and imaginary parts), in double: with P = C X, Q = X B U, X = (ξI − A)⁻¹,

@@ -597,8 +597,7 @@ std::string instability_warning(Domain domain, const Eigen::VectorXcd& poles) {
   }
   if (worst < 0) return "";
   const cplx z = poles(worst);
-  return "the identified model is unstable: pole " + fmt(z.real(), 6) + (z.imag() < 0 ? "-" : "+") +
-         fmt(std::abs(z.imag()), 6) + "j " +
+  return "the identified model is unstable: pole " + pole_text(z) + " " +
          (discrete ? "of modulus " + fmt(std::abs(z), 6) + " >= 1" : "with real part >= 0") +
          "; it fits the data's frequency response but must not be simulated: try another --order or --r";
 }

@@ -166,6 +166,10 @@ std::vector<OutOfBandResonance> resonances_outside_band(const Eigen::VectorXcd& 
   return found;
 }
 
+std::string pole_text(cplx z) {
+  return fmt(z.real(), 6) + (z.imag() < 0 ? "-" : "+") + fmt(std::abs(z.imag()), 6) + "j";
+}
+
 std::string out_of_band_warning(const std::vector<OutOfBandResonance>& found, Domain domain, double lo, double hi,
                                 const std::string& excited) {
   if (found.empty()) return "";

@@ -509,6 +509,18 @@ Figure frf_figure(const FrfData& d, const FrfResult& res, const std::vector<Eige
     }
     mag.series.push_back(model);
     phase.series.push_back(model_phase);
+    // The refined model's uncertainty (issue 15): 2 σ of |G_model| from the
+    // Cramér–Rao bound, on the residual panel, where it compares with the
+    // residual and the noise (on |G| itself it is too thin to see).
+    if (magnitude_sd && static_cast<int>(magnitude_sd->size()) == F) {
+      Series band;
+      band.label = "2#gs of |G#dmodel#u| (Cramer-Rao)" + ij;
+      band.colour = model.colour;
+      band.width = 3;
+      band.x = r.x;
+      for (int k = 0; k < F; ++k) band.y.push_back(2 * (*magnitude_sd)[k](i, j));
+      resid.series.push_back(band);
+    }
   }
   for (int i = 0; !data_frf && i < p; ++i) {
     Series r, sd;
@@ -544,21 +556,6 @@ Figure frf_figure(const FrfData& d, const FrfResult& res, const std::vector<Eige
     }
     resid.series.push_back(sd);
     mag.series.push_back(sd);
-  }
-  // The refined model's uncertainty (issue 15): 2 σ of |G_model| from the
-  // Cramér–Rao bound, on the residual panel, where it compares with the
-  // residual and the noise (on |G| itself it is too thin to see).
-  for (int e = 0; magnitude_sd && static_cast<int>(magnitude_sd->size()) == F && e < entries; ++e) {
-    const int i = e / mi, j = e % mi;
-    Series band;
-    band.label = "2#gs of |G#dmodel#u| (Cramer-Rao)" + (p * mi > 1 ? " #d" + std::to_string(i + 1) + std::to_string(j + 1) + "#u" : std::string());
-    band.colour = kCycle[(2 * e + 1) % 10];
-    band.width = 3;
-    for (int k = 0; k < F; ++k) {
-      band.x.push_back(d.omega(k) * hz);
-      band.y.push_back(2 * (*magnitude_sd)[k](i, j));
-    }
-    resid.series.push_back(band);
   }
   if (p * mi > entries) mag.title += " (first 4 entries)";
   mag.legend = LegendAt::BottomLeft;

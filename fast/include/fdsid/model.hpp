@@ -40,6 +40,9 @@ Eigen::MatrixXcd power_spectrum(const StateSpace& model, cplx z);
 /// Eigenvalues of A (the poles), sorted by modulus then argument.
 Eigen::VectorXcd poles(const StateSpace& model);
 
+/// A pole as text, "re+imj" / "re-imj" with 6 significant digits each (warnings, notes).
+std::string pole_text(cplx z);
+
 /// The largest pole modulus, max |λ_i(A)| (0 for order 0); a discrete-time
 /// model is stable when it is < 1.
 double spectral_radius(const StateSpace& model);
