@@ -11,7 +11,6 @@
 #include <iostream>
 #include <memory>
 
-#include <Eigen/SVD>
 
 #include "common.hpp"
 #include "fdsid/certified.hpp"
@@ -47,29 +46,17 @@ RealQuantity points(const std::string& name, const std::vector<Complex>& z) {
   return q;
 }
 
-// G(ξ) Q with Q = V Uᵀ from D = U Σ Vᵀ (fdsid::normalised_factor in the reference's precision).
-MatrixC factor_at(const reference::Model& model, const Real& omega) {
-  Eigen::JacobiSVD<MatrixR> svd(model.D, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const MatrixR Q = svd.matrixV() * svd.matrixU().transpose();
-  return reference::frequency_response(model, omega) * Q.cast<Complex>();
-}
-
-std::vector<Complex> transmission_zeros(const reference::Model& model) {
-  const MatrixR Az = model.A - model.B * model.D.inverse() * model.C;
-  return reference::eigenvalues(Az);
-}
-
 // The system a noise-free spectrum case was sampled from, read from its
 // decimal strings in this build's precision: it must be the minimum-phase
 // factor (poles and zeros strictly inside the unit circle, D nonsingular), so
 // that its normalised G is the exact factor of the sampled spectrum.
 reference::Model minimum_phase_system(const std::string& path) {
   const reference::Model g = reference::read_model(path);
-  if (g.D.rows() != g.D.cols() || g.D.fullPivLu().rank() < g.D.rows())
+  if (!reference::nonsingular(g.D))
     throw Error(ErrorKind::Input, path, "D must be square and nonsingular (a spectral factor)");
   for (const Complex& z : reference::eigenvalues(g.A))
     if (!(abs(z) < 1)) throw Error(ErrorKind::Input, path, "a pole of modulus " + reference::to_decimal(abs(z), 6) + " is not inside the unit circle");
-  for (const Complex& z : transmission_zeros(g))
+  for (const Complex& z : reference::transmission_zeros(g))
     if (!(abs(z) < 1))
       throw Error(ErrorKind::Input, path, "a zero of modulus " + reference::to_decimal(abs(z), 6) + " is not inside the unit circle: "
                                           "not the minimum-phase factor");
@@ -114,7 +101,7 @@ CaseResult compute_case(const CaseSpec& s, const std::string& suite, bool with_p
     for (const reference::Result& x : moved)
       out.perturbed.push_back(model_from_json(reference::result_to_json(x, vo, 40), "perturbed reference model"));
     out.quantities.push_back(points("poles", res.poles));
-    out.quantities.push_back(points("zeros", transmission_zeros(res.model)));
+    out.quantities.push_back(points("zeros", reference::transmission_zeros(res.model)));
     RealQuantity S{"S", {}, m, m, {}}, G{"factor", {}, m, m, {}}, X{"exact_factor", {}, m, m, {}};
     reference::Model system;
     if (!s.system.empty()) system = minimum_phase_system(suite + "/" + s.system);
@@ -124,10 +111,10 @@ CaseResult compute_case(const CaseSpec& s, const std::string& suite, bool with_p
       S.omega.push_back(w);
       G.omega.push_back(w);
       S.values.push_back(reference::spectrum_of(res.model, Complex(cos(wr), sin(wr))));
-      G.values.push_back(factor_at(res.model, wr));
+      G.values.push_back(reference::normalised_factor_response(res.model, wr));
       if (!s.system.empty()) {
         X.omega.push_back(w);
-        X.values.push_back(factor_at(system, wr));
+        X.values.push_back(reference::normalised_factor_response(system, wr));
       }
     }
     out.quantities.push_back(S);

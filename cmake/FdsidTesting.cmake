@@ -16,6 +16,14 @@
 # build dir, where it has no Testing/Temporary/CTestCostData.txt yet: started
 # last, the longest test ran alone on one core for two minutes (CI: 323 s of
 # tests where the cost data of a second run gave ~260 s).
+#
+# Every test gets TIMEOUT 600 s: 4x the longest quick test under the sanitizers
+# (that LONG test, ~150 s) and 10x the longest slow test in Release (~60 s). A
+# property whose random seed found a failing case shrinks it with the 50-digit
+# reference in every step, which under ASan can take hours (seen once in CI):
+# the timeout turns that into a failure with the test's output, whose
+# "Using configuration: seed=..." line (scripts/test-all.sh sets RC_PARAMS)
+# reproduces it.
 include(GoogleTest)
 function(fdsid_discover_tests target)
   cmake_parse_arguments(ARG "" "WORKING_DIRECTORY" "LABELS;SLOW;LONG" ${ARGN})
@@ -40,6 +48,7 @@ function(fdsid_discover_tests target)
     "    endif()\n"
     "  endforeach()\n"
     "  foreach(t IN LISTS ${target}_TESTS)\n"
+    "    set_tests_properties(\${t} PROPERTIES TIMEOUT 600)\n"
     "    list(FIND slow \${t} i)\n"
     "    if(i EQUAL -1)\n"
     "      set_tests_properties(\${t} PROPERTIES LABELS \"${labels}\")\n"

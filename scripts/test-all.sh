@@ -24,6 +24,11 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 t0=$(date +%s)
+# One RapidCheck seed for the run, printed here and in every property test's
+# output ("Using configuration: seed=..."): a failure found in CI reproduces with
+# RC_PARAMS="seed=N" (or the reproduce string RapidCheck prints when it ends).
+export RC_PARAMS="${RC_PARAMS:-seed=$(od -An -N4 -tu4 /dev/urandom | tr -d ' ')}"
+echo "== RapidCheck: RC_PARAMS=\"$RC_PARAMS\""
 bash scripts/install-deps.sh
 t_deps=$(date +%s)
 

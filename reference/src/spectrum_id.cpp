@@ -11,6 +11,7 @@
 // of compile time with a multiprecision scalar, so other files only call the
 // functions declared in spectrum_id.hpp.
 #include "fdsid/reference/spectrum_id.hpp"
+#include "fdsid/reference/frf_id.hpp"  // frequency_response
 
 #include "common.hpp"
 
@@ -688,6 +689,23 @@ std::vector<Complex> eigenvalues(const MatrixR& X) {
   if (eig.info() != Eigen::Success) throw Error("eigenvalues: real Schur iteration did not converge");
   const auto& lambda = eig.eigenvalues();
   return std::vector<Complex>(lambda.data(), lambda.data() + lambda.size());
+}
+
+std::vector<Complex> transmission_zeros(const Model& model) {
+  if (model.D.rows() != model.D.cols()) throw InputError("transmission_zeros: D is not square");
+  return eigenvalues(model.A - model.B * model.D.householderQr().solve(model.C));
+}
+
+bool nonsingular(const MatrixR& D) {
+  if (D.rows() != D.cols() || D.rows() == 0) return false;
+  const std::vector<Real> s = singular_values(D);
+  return s.back() > Real(D.rows()) * std::numeric_limits<Real>::epsilon() * s.front();
+}
+
+MatrixC normalised_factor_response(const Model& model, const Real& omega) {
+  Eigen::JacobiSVD<MatrixR> svd(model.D, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const MatrixR Q = svd.matrixV() * svd.matrixU().transpose();
+  return frequency_response(model, omega) * Q.cast<Complex>();
 }
 
 // ---------------------------------------------------------------------------

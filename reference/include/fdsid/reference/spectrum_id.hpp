@@ -139,6 +139,20 @@ std::vector<Real> singular_values(const MatrixR& X);
 /// in the order the solver returns them.
 std::vector<Complex> eigenvalues(const MatrixR& X);
 
+/// The zeros of a square factor G(z) = D + C(zI − A)⁻¹B with D nonsingular:
+/// the eigenvalues of A − B D⁻¹C (D⁻¹C by Householder QR).
+std::vector<Complex> transmission_zeros(const Model& model);
+
+/// Whether a square D is nonsingular in this precision: σ_min > m ε σ_max, the
+/// rank threshold of Eigen's FullPivLU (m ε relative to the largest pivot) on
+/// the singular values.
+bool nonsingular(const MatrixR& D);
+
+/// G(e^{iω}) Q with Q = V Uᵀ from D = U Σ Vᵀ (JacobiSVD): the factor in the
+/// normalisation of fdsid::normalised_factor (fast/, compare.hpp), in which two
+/// realisations of one spectral factor agree entry by entry. Discrete models.
+MatrixC normalised_factor_response(const Model& model, const Real& omega);
+
 /// What identify_spectrum returns.
 struct Result {
   /// (Â, B̂, Ĉ, D̂), real; Â is block diagonal: 1×1 blocks λ for real poles,
