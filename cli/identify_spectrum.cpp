@@ -7,6 +7,7 @@
 #include "fdsid/figures.hpp"
 #include "fdsid/io.hpp"
 #include "fdsid/json.hpp"
+#include "fdsid/refine.hpp"
 #include "fdsid/spectrum_id.hpp"
 #include "high_precision.hpp"
 
@@ -19,10 +20,34 @@ struct IdentifySpectrumCommand {
   SpectrumOptions options;  // order 0 = auto, p and r 0 = default_pr
   Precision precision = Precision::Double;
   bool strict = false;
+  bool refine = false;  ///< --refine: weighted NLS of the factor from Algorithm 1's estimate (issue 15)
 };
+
+nlohmann::json refinement_json(const SpectrumRefineResult& r, const SpectrumResult& start) {
+  nlohmann::json j = {{"method", "weighted nonlinear least squares of the factor on the Hermitian part of the samples "
+                                 "(Levenberg-Marquardt, real modal form, poles kept stable), then minimum phase by step 9"},
+                      {"weights", r.weighted ? "1 / S_var (the data's noise variance)" : "unit (no S_var column)"},
+                      {"cost_start", r.cost_start},
+                      {"cost", r.cost},
+                      {"terms", r.terms},
+                      {"parameters", r.parameters},
+                      {"iterations", r.iterations},
+                      {"termination", r.termination},
+                      {"at_stability_bound", r.at_stability_bound},
+                      {"max_zero_modulus", r.max_zero_modulus},
+                      {"warnings", r.warnings}};
+  nlohmann::json a = model_to_json(start.model);
+  nlohmann::json poles = nlohmann::json::array();
+  for (const cplx& z : fdsid::poles(start.model)) poles.push_back({z.real(), z.imag()});
+  a["poles"] = poles;
+  j["algorithm1_model"] = a;
+  return j;
+}
 
 int run(const IdentifySpectrumCommand& c) {
   if (c.options.p < 0 || c.options.r < 0) throw Error(ErrorKind::Input, c.options.p < 0 ? "--p" : "--r", "must be positive");
+  if (c.precision == Precision::High && c.refine)
+    throw Error(ErrorKind::Input, "--refine", "refines the double-precision estimate; not with --precision high");
   if (c.precision == Precision::High && !c.plot_path.empty())
     throw Error(ErrorKind::Input, "--plot", "is drawn from the double-precision result; not with --precision high");
   refuse_overwrite(c.plot_path, {c.data_path, c.json_path}, "--plot");
@@ -48,8 +73,30 @@ int run(const IdentifySpectrumCommand& c) {
       << sci(res.riccati_residual, 1) << "\n";
   for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
   if (refused_as_unusable(c.strict, res.error_estimate)) return 1;
-  emit_json(c.json_path, to_json(res, c.data_path));
-  emit_plot(c.plot_path, plot::spectrum_figure(data, res));
+  if (!c.refine) {
+    emit_json(c.json_path, to_json(res, c.data_path));
+    emit_plot(c.plot_path, plot::spectrum_figure(data, res));
+    return 0;
+  }
+  SpectrumRefineResult refined;
+  try {
+    refined = refine_spectrum(data, res.model);
+  } catch (const Error& e) {
+    throw e.within(c.data_path);
+  }
+  out << "refined (" << (refined.weighted ? "weights 1/S_var" : "unit weights") << "): V " << sci(refined.cost_start)
+      << " -> " << sci(refined.cost) << " over " << refined.terms << " terms, " << refined.iterations << " iterations ("
+      << refined.termination << "), largest |zero| " << fmt(refined.max_zero_modulus, 6) << "\n";
+  print_poles(out, poles(refined.model));
+  for (const std::string& w : refined.warnings) out << "warning: " << w << "\n";
+  SpectrumResult shown = res;  // the written model is the refined factor; Algorithm 1's goes under "refinement"
+  shown.model = refined.model;
+  shown.summands = spectral_summands(refined.model);
+  shown.max_zero_modulus = refined.max_zero_modulus;
+  nlohmann::json j = to_json(shown, c.data_path);
+  j["refinement"] = refinement_json(refined, res);
+  emit_json(c.json_path, j);
+  emit_plot(c.plot_path, plot::spectrum_figure(data, shown));
   return 0;
 }
 
@@ -78,6 +125,9 @@ void register_identify_spectrum(CLI::App& app, Action& chosen) {
       ->transform(choice(std::map<std::string, Extension>{{"hermitian-part", Extension::HermitianPart},
                                                           {"conjugate", Extension::Conjugate}},
                          "is not hermitian-part or conjugate"));
+  ids->add_flag("--refine", c->refine,
+                "refine Algorithm 1's factor by weighted nonlinear least squares on the samples (weights 1/S_var when "
+                "the CSV has an S_var column, else unit), kept stable and minimum phase");
   on_parsed(ids, c, chosen, run);
 }
 

@@ -789,3 +789,71 @@ TEST_F(Cli, CheckRefusesBadCandidates) {
   const std::string badp = write("bp.json", R"({"domain":"discrete","sample_time":1,"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]],"p":-3})");
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", badp, "--data", data}), {"\"p\""}));
 }
+
+// ---------------------------------------------------------------------------
+// identify-spectrum --refine and reproduce table2 --refine (issue 15, item 2)
+
+// The bundled noisy spectrum (Section 4's setting, M = 1000): the refined
+// factor is written with its costs, its cost does not exceed the start's (the
+// minimiser starts there), it is stable and minimum phase, and Algorithm 1's
+// model is kept under "refinement". An S_var column is read as weights and
+// named; a non-positive one and --precision high are refused by name.
+TEST_F(Cli, IdentifySpectrumRefine) {
+  const std::string data = std::string(FDSID_SOURCE_DIR) + "/data/akcay2011_M1000_eps1e-3.csv";
+  const RunResult r = identify(data, {"--order", "4", "--refine", "--json", path("refined.json")});
+  ASSERT_TRUE(Succeeded(r)) << describe(r);
+  EXPECT_NE(r.out.find("refined (unit weights): V "), std::string::npos) << describe(r);
+  json j;
+  { std::ifstream f(path("refined.json")); j = json::parse(f); }
+  const json& ref = j.at("refinement");
+  EXPECT_LE(ref.at("cost").get<double>(), ref.at("cost_start").get<double>());
+  EXPECT_LT(ref.at("max_zero_modulus").get<double>(), 1.0);
+  EXPECT_EQ(ref.at("weights").get<std::string>(), "unit (no S_var column)");
+  EXPECT_TRUE(ref.at("algorithm1_model").contains("A"));
+  for (const auto& p : j.at("poles")) EXPECT_LT(std::hypot(p[0].get<double>(), p[1].get<double>()), 1.0);
+  EXPECT_EQ(ref.at("warnings").size(), 0u) << ref.dump(1);
+
+  // The same samples with an S_var column (constant: the same optimum, weights named).
+  std::ifstream in(data);
+  std::string line, with_var;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    with_var += line + (header ? ",S_var\n" : ",1e-6\n");
+    header = false;
+  }
+  const std::string var_file = write("with_var.csv", with_var);
+  const RunResult w = identify(var_file, {"--order", "4", "--refine", "--json", path("weighted.json")});
+  ASSERT_TRUE(Succeeded(w)) << describe(w);
+  EXPECT_NE(w.out.find("refined (weights 1/S_var)"), std::string::npos) << describe(w);
+  std::string zero_var = with_var;
+  zero_var.replace(zero_var.rfind("1e-6"), 4, "0");
+  EXPECT_TRUE(IsBadInput(identify(write("zero_var.csv", zero_var), {"--order", "4", "--refine"}), {"S_var", "must be positive"}));
+  EXPECT_TRUE(IsBadInput(identify(data, {"--order", "4", "--refine", "--precision", "high"}), {"--refine", "--precision high"}));
+
+  // The 50-digit reader accepts (and ignores) the S_var column.
+  const std::string g1 = write("g1.json", R"({"domain":"discrete","sample_time":1,"A":[[0.8]],"B":[[1]],"C":[[0.3]],"D":[[1]]})");
+  ASSERT_TRUE(Succeeded(run_fdsid({"sample-spectrum", "--model", g1, "--M", "16", "--out", path("g1.csv")})));
+  std::ifstream small(path("g1.csv"));
+  std::string small_var;
+  header = true;
+  while (std::getline(small, line)) {
+    if (line.empty()) continue;
+    small_var += line + (header ? ",S_var\n" : ",0.25\n");
+    header = false;
+  }
+  const RunResult h = identify(write("g1_var.csv", small_var), {"--order", "1", "--precision", "high"});
+  EXPECT_TRUE(Succeeded(h)) << describe(h);
+}
+
+TEST_F(Cli, Table2RefineReportsRefinedErrors) {
+  const RunResult r = run_fdsid(
+      {"reproduce", "table2", "--realizations", "3", "--M", "200", "--vo-epsilon", "0", "--refine", "--json", "-"});
+  ASSERT_TRUE(Succeeded(r)) << describe(r);
+  const json j = json::parse(r.out);
+  const json& row = j.at("rows").at(0);
+  EXPECT_EQ(row.at("refine_failures").get<int>(), 0);
+  EXPECT_GT(row.at("l2_refined").get<double>(), 0.0);
+  EXPECT_GT(row.at("linf_refined").get<double>(), 0.0);
+  EXPECT_TRUE(j.contains("refinement"));
+}

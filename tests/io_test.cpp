@@ -120,6 +120,13 @@ TEST(SpectrumCsv, WriteThenReadIsExact) {
   std::stringstream s;
   write_spectrum_csv(s, d);
   EXPECT_EQ(parse_spectrum_csv(s, "x").S, d.S);
+  // The optional S_var column (the samples' noise variance) round-trips too.
+  d.variance = Eigen::VectorXd::Random(4).cwiseAbs().array() + 0.5;
+  std::stringstream v;
+  write_spectrum_csv(v, d);
+  const SpectrumData back = parse_spectrum_csv(v, "x");
+  EXPECT_EQ(back.S, d.S);
+  EXPECT_EQ(back.variance, d.variance);
 }
 
 void expect_error(const std::string& text, ErrorKind kind, const std::string& fragment) {

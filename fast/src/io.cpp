@@ -310,16 +310,18 @@ void check_hermitian(const SpectrumData& d, const std::string& name) {
 }  // namespace
 
 SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
-  const CsvHeader csv = read_csv_header(in, name, "omega,S_re,S_im");
+  const CsvHeader csv = read_csv_header(in, name, "omega,S_re,S_im[,S_var]");
   const auto& header = csv.cells;
-  const auto cols = header.size();
+  // An optional last column S_var: the variance of each sample's noise (spectrum_id.hpp).
+  const bool has_var = !header.empty() && header.back() == "S_var";
+  const auto cols = header.size() - (has_var ? 1 : 0);
   if (cols >= 3 && header[0] == "omega" && header[1] == "G_re")
     input_error(name + " line 1", "holds a frequency response (omega,G_re,G_im...), not a power spectrum: "
                                   "identify-frf --frf reads it");
   if (cols >= 2 && header[0] == "u")
     input_error(name + " line 1", "holds periodic records (u,y...), not a power spectrum: identify-frf --data reads them");
   if (cols < 3 || (cols - 1) % 2 != 0 || header[0] != "omega")
-    input_error(name + " line 1", "header must be omega,S_re,S_im or omega,S11_re,S11_im,...,Smm_re,Smm_im");
+    input_error(name + " line 1", "header must be omega,S_re,S_im or omega,S11_re,S11_im,...,Smm_re,Smm_im (then optionally S_var)");
   const int entries = static_cast<int>((cols - 1) / 2);
   const int m = static_cast<int>(std::lround(std::sqrt(entries)));
   if (m * m != entries) input_error(name + " line 1", std::to_string(entries) + " complex columns is not m*m for any m");
@@ -330,13 +332,18 @@ SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
       input_error(name + " line 1", "column " + std::to_string(2 + 2 * e) + " should be " + base + "_re then " + base +
                                         "_im, found " + header[1 + 2 * e] + "," + header[2 + 2 * e]);
   }
-  std::vector<double> omega;
+  std::vector<double> omega, variance;
   std::vector<cplx> values;
   for_each_csv_row(in, name, csv, [&](const std::vector<std::string>& cells, const std::string& where) {
     omega.push_back(parse_cell(cells[0], where + " column omega"));
     for (int e = 0; e < entries; ++e)
       values.emplace_back(parse_cell(cells[1 + 2 * e], where + " column " + header[1 + 2 * e]),
                           parse_cell(cells[2 + 2 * e], where + " column " + header[2 + 2 * e]));
+    if (has_var) {
+      const double v = parse_cell(cells[cols], where + " column S_var");
+      if (!(v > 0)) input_error(where + " column S_var", "variance " + cells[cols] + " must be positive");
+      variance.push_back(v);
+    }
   });
   if (omega.size() < 2) input_error(name, "needs at least 2 samples (M >= 1), found " + std::to_string(omega.size()));
   SpectrumData d;
@@ -365,6 +372,7 @@ SpectrumData parse_spectrum_csv(std::istream& in, const std::string& name) {
                       "): the uniform-grid methods need M+1 samples from 0 to pi");
   }
   d.S.resize(m * m, d.M + 1);
+  if (has_var) d.variance = Eigen::Map<const Eigen::VectorXd>(variance.data(), d.M + 1);
   for (int k = 0; k <= d.M; ++k)
     for (int e = 0; e < entries; ++e) {
       const int a = e / m, b = e % m;  // CSV is row-major; S stores vec() column-major
@@ -389,6 +397,8 @@ void write_spectrum_csv(std::ostream& out, const SpectrumData& d) {
       const std::string base = m == 1 ? "S" : "S" + std::to_string(a + 1) + std::to_string(b + 1);
       out << ',' << base << "_re," << base << "_im";
     }
+  const bool has_var = d.variance.size() == d.M + 1;
+  if (has_var) out << ",S_var";
   out << '\n';
   char buf[64];
   for (int k = 0; k <= d.M; ++k) {
@@ -400,6 +410,10 @@ void write_spectrum_csv(std::ostream& out, const SpectrumData& d) {
         std::snprintf(buf, sizeof buf, ",%.17g,%.17g", v.real(), v.imag());
         out << buf;
       }
+    if (has_var) {
+      std::snprintf(buf, sizeof buf, ",%.17g", d.variance(k));
+      out << buf;
+    }
     out << '\n';
   }
 }

@@ -94,8 +94,12 @@ json to_json(const std::vector<Table2Row>& rows, const Table2Options& o) {
       {"epsilon", o.epsilon},
       {"variance", to_string(o.noise)},
       {"extension", to_string(o.extension)}};
+  if (o.refine)
+    j["refinement"] = "refine_spectrum (weighted nonlinear least squares of the factor on the Hermitian part of the "
+                      "samples, weights 1/(eps^2 |H(z_k)|^2)) started from each Algorithm 1 estimate";
   j["rows"] = json::array();
-  for (const auto& r : rows)
+  auto number_or_null = [](double x) { return std::isnan(x) ? json(nullptr) : json(x); };
+  for (const auto& r : rows) {
     j["rows"].push_back({{"M", r.M},
                          {"l2", r.l2},
                          {"linf", r.linf},
@@ -105,7 +109,16 @@ json to_json(const std::vector<Table2Row>& rows, const Table2Options& o) {
                          {"vo1997_runs", r.vo_runs},
                          {"vo1997_failures", r.vo_failures},
                          {"vo1997_step6_failures", r.vo_split_failures},
-                         {"vo1997_l2_when_returned", std::isnan(r.vo_l2) ? json(nullptr) : json(r.vo_l2)}});
+                         {"vo1997_l2_when_returned", number_or_null(r.vo_l2)}});
+    if (o.refine) {
+      json& row = j["rows"].back();
+      row["l2_refined"] = number_or_null(r.l2_refined);
+      row["linf_refined"] = number_or_null(r.linf_refined);
+      row["l2_refined_sd"] = number_or_null(r.l2_refined_sd);
+      row["linf_refined_sd"] = number_or_null(r.linf_refined_sd);
+      row["refine_failures"] = r.refine_failures;
+    }
+  }
   return j;
 }
 

@@ -3,7 +3,9 @@
 // Marquardt by Ceres Solver, and the Cramér–Rao bound at the optimum.
 #include "fdsid/refine.hpp"
 
-#include <ceres/ceres.h>
+#include <ceres/cost_function.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
 
 #include <algorithm>
 #include <boost/math/distributions/chi_squared.hpp>
@@ -12,6 +14,7 @@
 
 #include "fdsid/error.hpp"
 #include "fdsid/format.hpp"
+#include "numerics/eigen_instances.hpp"
 
 namespace fdsid {
 
@@ -341,6 +344,62 @@ Eigen::MatrixXd jacobian(const FrfData& d, const Layout& l, const Eigen::VectorX
   return J;
 }
 
+
+/// Levenberg–Marquardt (Ceres, dense QR) on one parameter block θ of `lay`,
+/// with the stability bounds of refine.hpp when `keep_stable` (θ's starting
+/// poles are first clamped into the box). Throws Error(Numerical) on failure.
+ceres::Solver::Summary minimise(ceres::CostFunction& cost, const Layout& lay, Eigen::VectorXd& th, bool keep_stable,
+                                int max_iterations) {
+  ceres::Problem::Options po;
+  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(po);
+  problem.AddResidualBlock(&cost, nullptr, th.data());
+  const double hi = 1 - kStabilityMargin;
+  if (keep_stable)
+    for (size_t i = 0; i < lay.sizes.size(); ++i) {
+      const int o = lay.offset[i];
+      if (lay.domain == Domain::Continuous) {
+        th(o) = std::min(th(o), -kStabilityMargin);
+        problem.SetParameterUpperBound(th.data(), o, -kStabilityMargin);
+      } else if (lay.sizes[i] == 1) {
+        th(o) = std::clamp(th(o), -hi, hi);
+        problem.SetParameterLowerBound(th.data(), o, -hi);
+        problem.SetParameterUpperBound(th.data(), o, hi);
+      } else {
+        th(o) = std::min(th(o), hi);
+        problem.SetParameterLowerBound(th.data(), o, 0.0);
+        problem.SetParameterUpperBound(th.data(), o, hi);
+      }
+    }
+  ceres::Solver::Options so;
+  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  so.linear_solver_type = ceres::DENSE_QR;
+  so.max_num_iterations = max_iterations;
+  so.function_tolerance = 1e-14;   // ≈ 50 u: relative cost changes below are the rounding of V's sum
+  so.parameter_tolerance = 1e-12;  // relative step: ≈ 5e3 u, below what the data determine
+  so.gradient_tolerance = 0;       // no absolute gradient test: V's scale is the data's
+  so.logging_type = ceres::SILENT;
+  so.minimizer_progress_to_stdout = false;
+  so.num_threads = 1;
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, &problem, &summary);
+  if (summary.termination_type == ceres::FAILURE || !th.allFinite())
+    fail(ErrorKind::Numerical, "Levenberg-Marquardt failed: " + summary.message);
+  return summary;
+}
+
+const char* termination_text(const ceres::Solver::Summary& summary) {
+  return summary.termination_type == ceres::CONVERGENCE      ? "convergence"
+         : summary.termination_type == ceres::NO_CONVERGENCE ? "no_convergence"
+                                                             : "stopped";
+}
+
+/// Whether mode i's pole parameter sits on its stability bound.
+bool on_stability_bound(const Layout& lay, const Eigen::VectorXd& th, size_t i) {
+  const int o = lay.offset[i];
+  return lay.domain == Domain::Continuous ? th(o) >= -kStabilityMargin * (1 + 1e-6)
+                                          : std::abs(th(o)) >= (1 - kStabilityMargin) * (1 - 1e-12);
+}
 }  // namespace
 
 StateSpace reflect_unstable_poles(const FrfData& data, const StateSpace& model, std::vector<cplx>* reflected) {
@@ -383,45 +442,9 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
   Eigen::VectorXd th = lay.pack(md.model);
 
   MlCost cost(data, lay);
-  ceres::Problem::Options po;
-  po.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(po);
-  problem.AddResidualBlock(&cost, nullptr, th.data());
-  const double hi = 1 - kStabilityMargin;
-  if (!opt.allow_unstable)
-    for (size_t i = 0; i < lay.sizes.size(); ++i) {
-      const int o = lay.offset[i];
-      if (lay.domain == Domain::Continuous) {
-        th(o) = std::min(th(o), -kStabilityMargin);
-        problem.SetParameterUpperBound(th.data(), o, -kStabilityMargin);
-      } else if (lay.sizes[i] == 1) {
-        th(o) = std::clamp(th(o), -hi, hi);
-        problem.SetParameterLowerBound(th.data(), o, -hi);
-        problem.SetParameterUpperBound(th.data(), o, hi);
-      } else {
-        th(o) = std::min(th(o), hi);
-        problem.SetParameterLowerBound(th.data(), o, 0.0);
-        problem.SetParameterUpperBound(th.data(), o, hi);
-      }
-    }
-  ceres::Solver::Options so;
-  so.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = opt.max_iterations;
-  so.function_tolerance = 1e-14;   // ≈ 50 u: relative cost changes below are the rounding of V's sum
-  so.parameter_tolerance = 1e-12;  // relative step: ≈ 5e3 u, below what the data determine
-  so.gradient_tolerance = 0;       // no absolute gradient test: V's scale is the data's
-  so.logging_type = ceres::SILENT;
-  so.minimizer_progress_to_stdout = false;
-  so.num_threads = 1;
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
-  if (summary.termination_type == ceres::FAILURE || !th.allFinite())
-    fail(ErrorKind::Numerical, "Levenberg-Marquardt failed: " + summary.message);
+  const ceres::Solver::Summary summary = minimise(cost, lay, th, !opt.allow_unstable, opt.max_iterations);
   res.iterations = static_cast<int>(summary.iterations.size()) - 1;
-  res.termination = summary.termination_type == ceres::CONVERGENCE ? "convergence"
-                    : summary.termination_type == ceres::NO_CONVERGENCE ? "no_convergence"
-                                                                         : "stopped";
+  res.termination = termination_text(summary);
   res.model = lay.unpack(th.data(), res.start);
   res.cost = v_sub(res.model, data);
 
@@ -481,10 +504,7 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
       pu.frequency_sd = std::sqrt(std::max(0.0, gw.head(z).dot(C * gw.head(z))));
       pu.damping_sd = std::sqrt(std::max(0.0, gz.head(z).dot(C * gz.head(z))));
     }
-    const bool on_bound = !opt.allow_unstable &&
-                          (lay.domain == Domain::Continuous ? th(o) >= -kStabilityMargin * (1 + 1e-6)
-                                                            : std::abs(th(o)) >= hi * (1 - 1e-12));
-    res.at_stability_bound = res.at_stability_bound || on_bound;
+    res.at_stability_bound = res.at_stability_bound || (!opt.allow_unstable && on_stability_bound(lay, th, i));
     res.poles.push_back(pu);
   }
   // The bound assumes a right model; a rejected fit (p ≤ 1e-3, FitVerdict's
@@ -536,6 +556,137 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
           res.phase_sd[k](o, j) = std::sqrt(std::max(0.0, (dph * res.covariance * dph.transpose())(0, 0)));
         }
   }
+  return res;
+}
+
+}  // namespace fdsid
+
+// ---------------------------------------------------------------------------
+// Weighted nonlinear least squares of a spectral factor (refine.hpp)
+
+namespace fdsid {
+namespace {
+
+/// The residuals of refine_spectrum: per sample k, per entry a ≤ b of S
+/// (column-major over the upper triangle), Re for a = b, Re and Im for a < b,
+/// of (Herm(Ŝ_k) − G Gᴴ)/σ_k; G and ∂G/∂θ from Layout::evaluate on unit data
+/// (U = I, Y = 0, σ = 1: its residuals are −G, its Jacobian −∂G/∂θ).
+class SpectrumCost final : public ceres::CostFunction {
+ public:
+  SpectrumCost(const SpectrumData& d, const Layout& l) : d_(d), l_(l) {
+    const int m = d.m;
+    Eigen::VectorXd omega(d.M + 1);
+    for (int k = 0; k <= d.M; ++k) omega(k) = M_PI * k / d.M;
+    unit_ = frf_data(Domain::Discrete, omega, std::vector<Eigen::MatrixXcd>(d.M + 1, Eigen::MatrixXcd::Zero(m, m)));
+    per_sample_ = m * (m + 1) / 2 + m * (m - 1) / 2;  // = m²
+    set_num_residuals((d.M + 1) * per_sample_);
+    mutable_parameter_block_sizes()->push_back(l.count);
+    weight_.setOnes(d.M + 1);
+    if (d.variance.size() > 0) weight_ = d.variance.cwiseSqrt().cwiseInverse();
+  }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const int m = d_.m, rows = l_.rows(unit_), q = l_.count;
+    g_.resize(rows);
+    if (jacobians && jacobians[0]) jg_.resize(static_cast<size_t>(rows) * q);
+    if (!l_.evaluate(unit_, parameters[0], g_.data(), jacobians && jacobians[0] ? jg_.data() : nullptr)) return false;
+    // G(o, j) at sample k: −(g[row] + i g[row + 1]), row = 2((k m + j) m + o).
+    auto index = [m](int k, int o, int j) { return 2 * ((static_cast<size_t>(k) * m + j) * m + o); };
+    Eigen::MatrixXcd G(m, m), dG(m, m);
+    for (int k = 0; k <= d_.M; ++k) {
+      for (int j = 0; j < m; ++j)
+        for (int o = 0; o < m; ++o) G(o, j) = -cplx(g_[index(k, o, j)], g_[index(k, o, j) + 1]);
+      const Eigen::MatrixXcd S = G * G.adjoint();
+      size_t row = static_cast<size_t>(k) * per_sample_;
+      for (int b = 0; b < m; ++b)
+        for (int a = 0; a <= b; ++a) {
+          const cplx h = 0.5 * (d_.at(a, b, k) + std::conj(d_.at(b, a, k)));
+          const cplx e = (h - S(a, b)) * weight_(k);
+          residuals[row++] = e.real();
+          if (a < b) residuals[row++] = e.imag();
+        }
+      if (!(jacobians && jacobians[0])) continue;
+      double* J = jacobians[0];
+      for (int t = 0; t < q; ++t) {
+        for (int j = 0; j < m; ++j)
+          for (int o = 0; o < m; ++o) {
+            const size_t r = index(k, o, j);
+            dG(o, j) = -cplx(jg_[r * q + t], jg_[(r + 1) * q + t]);
+          }
+        const Eigen::MatrixXcd dS = dG * G.adjoint() + G * dG.adjoint();
+        size_t rr = static_cast<size_t>(k) * per_sample_;
+        for (int b = 0; b < m; ++b)
+          for (int a = 0; a <= b; ++a) {
+            const cplx v = -dS(a, b) * weight_(k);
+            J[rr++ * q + t] = v.real();
+            if (a < b) J[rr++ * q + t] = v.imag();
+          }
+      }
+    }
+    return true;
+  }
+
+ private:
+  const SpectrumData& d_;
+  const Layout& l_;
+  FrfData unit_;
+  int per_sample_ = 1;
+  Eigen::VectorXd weight_;
+  mutable std::vector<double> g_, jg_;
+};
+
+void check_spectrum_start(const SpectrumData& d, const StateSpace& start) {
+  validate(start, "starting factor");
+  if (start.domain != Domain::Discrete) fail(ErrorKind::Input, "a spectral factor is a discrete-time model");
+  if (start.order() < 1) fail(ErrorKind::Input, "the starting factor has order 0: nothing to refine");
+  if (start.outputs() != d.m || start.inputs() != d.m)
+    fail(ErrorKind::Input, "the starting factor is " + std::to_string(start.outputs()) + " x " +
+                               std::to_string(start.inputs()) + ", the spectrum " + std::to_string(d.m) + " x " +
+                               std::to_string(d.m));
+  if (d.variance.size() != 0 && (d.variance.size() != d.M + 1 || !(d.variance.array() > 0).all() || !d.variance.allFinite()))
+    fail(ErrorKind::Input, "the spectrum's variance needs M+1 positive values");
+}
+
+}  // namespace
+
+double spectrum_cost(const SpectrumData& data, const StateSpace& factor) {
+  check_spectrum_start(data, factor);
+  double v = 0;
+  for (int k = 0; k <= data.M; ++k) {
+    const Eigen::MatrixXcd S = power_spectrum(factor, std::polar(1.0, M_PI * k / data.M));
+    const double w = data.variance.size() > 0 ? 1 / data.variance(k) : 1.0;
+    for (int b = 0; b < data.m; ++b)
+      for (int a = 0; a <= b; ++a)
+        v += std::norm(0.5 * (data.at(a, b, k) + std::conj(data.at(b, a, k))) - S(a, b)) * w;
+  }
+  return v;
+}
+
+SpectrumRefineResult refine_spectrum(const SpectrumData& data, const StateSpace& start, int max_iterations) {
+  check_spectrum_start(data, start);
+  SpectrumRefineResult res;
+  res.start = start;
+  res.weighted = data.variance.size() > 0;
+  res.cost_start = spectrum_cost(data, start);
+  const Modal md = modal_form(start);
+  const Layout lay(md, 1.0);
+  Eigen::VectorXd th = lay.pack(md.model);
+  SpectrumCost cost(data, lay);
+  const ceres::Solver::Summary summary = minimise(cost, lay, th, /*keep_stable=*/true, max_iterations);
+  res.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  res.termination = termination_text(summary);
+  res.terms = cost.num_residuals();
+  res.parameters = lay.count;
+  for (size_t i = 0; i < lay.sizes.size(); ++i) res.at_stability_bound = res.at_stability_bound || on_stability_bound(lay, th, i);
+  StateSpace fitted = lay.unpack(th.data(), start);
+  res.model = minimum_phase_factor(fitted, &res.max_zero_modulus);
+  res.model.sample_time = start.sample_time;
+  res.cost = spectrum_cost(data, res.model);
+  if (res.at_stability_bound)
+    res.warnings.push_back("a pole of the refined factor sits on the stability margin (the constraint is active): the "
+                           "samples favour a pole on the unit circle there (a spectral line) or another order");
+  if (res.termination != "convergence")
+    res.warnings.push_back("the refinement stopped after " + std::to_string(res.iterations) +
+                           " iterations without converging (" + summary.message + ")");
   return res;
 }
 

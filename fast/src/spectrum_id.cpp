@@ -856,4 +856,16 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
   return res;
 }
 
+StateSpace minimum_phase_factor(const StateSpace& factor, double* max_zero_modulus) {
+  validate(factor, "factor");
+  if (factor.domain != Domain::Discrete || factor.inputs() != factor.outputs())
+    throw Error(ErrorKind::Input, "minimum_phase_factor", "needs a square discrete-time factor");
+  SpectralSummands s = spectral_summands(factor);
+  StateSpace g;
+  const RiccatiStep ric = step9_riccati_B_D(s, g);
+  g.sample_time = factor.sample_time;
+  if (max_zero_modulus) *max_zero_modulus = ric.max_zero_modulus;
+  return g;
+}
+
 }  // namespace fdsid

@@ -291,10 +291,15 @@ json result_to_json(const Result& result, bool van_overschee, int digits) {
 namespace {
 
 // The header of the power-spectrum CSV: omega then S_re,S_im (m = 1; also
-// S11_re,S11_im) or S11_re,S11_im,…,Smm_im, i.e. 1 + 2m² columns. Returns m;
-// `fail` (which throws) on any other header.
-int spectrum_header_size(const std::vector<std::string>& header, int header_line, const Fail& fail) {
-  if (header.empty()) fail(header_line, "empty file, expected header omega,S_re,S_im,...");
+// S11_re,S11_im) or S11_re,S11_im,…,Smm_im, i.e. 1 + 2m² columns, optionally
+// followed by S_var (the samples' noise variance, which only fast/'s
+// refinement reads: parsed, not used here). Returns m; `fail` (which throws)
+// on any other header.
+int spectrum_header_size(const std::vector<std::string>& header_in, int header_line, const Fail& fail, bool& has_var) {
+  if (header_in.empty()) fail(header_line, "empty file, expected header omega,S_re,S_im,...");
+  has_var = header_in.back() == "S_var";
+  std::vector<std::string> header = header_in;
+  if (has_var) header.pop_back();
   int m = 0;
   const std::size_t cols = header.size();
   while (1 + 2 * static_cast<std::size_t>(m + 1) * (m + 1) <= cols) ++m;
@@ -333,11 +338,14 @@ Spectrum read_spectrum_csv(const std::string& path) {
   std::vector<int> omega_line;
   Spectrum spectrum;
   int m = 0;
+  bool has_var = false;
   const int line_number = read_decimal_csv(
       path,
       [&](const std::vector<std::string>& header, int header_line, const Fail& fail) {
-        m = spectrum_header_size(header, header_line, fail);
-        return spectrum_header(m);
+        m = spectrum_header_size(header, header_line, fail, has_var);
+        std::vector<std::string> names = spectrum_header(m);
+        if (has_var) names.push_back("S_var");
+        return names;
       },
       [&](const std::vector<Real>& values, const std::vector<std::string>&, int line, const Fail&) {
         MatrixC S(m, m);

@@ -11,6 +11,7 @@
 
 #include "fdsid/frf_id.hpp"
 #include "fdsid/model.hpp"
+#include "fdsid/spectrum_id.hpp"
 
 namespace fdsid {
 
@@ -112,5 +113,47 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& start, const Refin
 /// and the same C. Returns the model unchanged when it is stable; `reflected`
 /// receives the poles that moved. Works on the real modal form.
 StateSpace reflect_unstable_poles(const FrfData& data, const StateSpace& model, std::vector<cplx>* reflected);
+
+/// What refine_spectrum returns.
+struct SpectrumRefineResult {
+  StateSpace model;            ///< the refined minimum-phase factor (stable, zeros inside the circle)
+  StateSpace start;            ///< the factor it started from
+  bool weighted = false;       ///< residuals weighted by the data's variance (S_var); else unit weights
+  double cost_start = 0;       ///< V at the start
+  double cost = 0;             ///< V at the refined factor
+  int terms = 0;               ///< real residuals: (M+1) m²
+  int parameters = 0;          ///< of the modal parametrisation
+  int iterations = 0;          ///< Levenberg–Marquardt iterations
+  std::string termination;     ///< "convergence", "no_convergence" or "stopped"
+  bool at_stability_bound = false;
+  double max_zero_modulus = 0; ///< largest |zero| of the refined factor (< 1)
+  std::vector<std::string> warnings;
+};
+
+/// Weighted nonlinear least squares of a spectral factor on the spectrum
+/// samples (issue 15, item 2): the refinement of Akçay's Algorithm 1 estimate.
+///
+/// Purpose: the factor G = (A, B, C, D) of order n minimising
+///   V = Σ_k Σ_{a ≤ b} |Herm(Ŝ_k)_ab − (G(z_k) G(z_k)ᴴ)_ab|² / σ²_k,
+/// z_k = e^{iπk/M}, Herm(Ŝ) = (Ŝ + Ŝᴴ)/2 (a power spectrum is Hermitian; the
+/// anti-Hermitian part of the samples is noise, as in Algorithm 1's default
+/// reading), σ²_k the data's `variance` or 1 (unit weights, the default: then
+/// V is the squared L2 error against the samples). With the noise's variance
+/// the estimate is the Gaussian maximum-likelihood one; the cost's law is not
+/// stated (spectral estimates are not Gaussian in general), so no p-value.
+///
+/// Method: the factor is parametrised in real modal form with stable poles
+/// kept by bounds, exactly as refine_ml (the same layout and analytic
+/// Jacobian of G; ∂S = ∂G Gᴴ + G ∂Gᴴ), and minimised by Levenberg–Marquardt
+/// (Ceres). Fitting G rather than the summands keeps S = G Gᴴ ≥ 0 on the whole
+/// circle by construction; the result is brought to minimum phase by
+/// minimum_phase_factor (the summands of G and Algorithm 1 step 9), which
+/// leaves S unchanged.
+/// Fails: Error(Input) for a start of another size or domain, Error(Numerical)
+/// as refine_ml, step 9's errors when the refined S is singular on the circle.
+SpectrumRefineResult refine_spectrum(const SpectrumData& data, const StateSpace& start, int max_iterations = 200);
+
+/// The cost V of refine_spectrum for a factor (its weights: the data's variance when given).
+double spectrum_cost(const SpectrumData& data, const StateSpace& factor);
 
 }  // namespace fdsid

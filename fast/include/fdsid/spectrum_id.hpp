@@ -18,6 +18,10 @@ struct SpectrumData {
   int m = 1;
   int M = 0;
   Eigen::MatrixXcd S;
+  /// Optional (the CSV's S_var column): the variance of each sample's noise,
+  /// E|ΔS_ab(k)|², one value per sample k (M+1), the same for every entry.
+  /// Empty when not given. Only the refinement (refine_spectrum) uses it.
+  Eigen::VectorXd variance;
   /// Entry (a, b) of sample k (0-based a, b, k).
   cplx at(int a, int b, int k) const { return S(a + m * b, k); }
 };
@@ -125,6 +129,16 @@ struct SpectrumResult {
 /// Automatica 33 (1997) 2147-2157; Chu, Fan, Lin, Linear Algebra Appl. 396 (2005)
 /// 55-80 (SDA).
 SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions& options);
+
+/// The minimum-phase factor of the spectrum S(z) = G(z) Gᵀ(1/z) of a stable
+/// factor G = (A, B, C, D) (discrete): the spectral summands of G
+/// (spectral_summands, a Lyapunov equation) and Algorithm 1 step 9 (Riccati,
+/// B̂, D̂). The poles are G's; zeros outside the circle move to their
+/// reflections 1/z̄, and D̂ is symmetric positive definite. Writes the largest
+/// |zero| of the result (< 1) to *max_zero_modulus when given.
+/// Fails as step 9 does: Error(Positivity) or Error(Riccati) when S is singular
+/// somewhere on the circle (G has a zero on it).
+StateSpace minimum_phase_factor(const StateSpace& factor, double* max_zero_modulus = nullptr);
 
 /// Reads the order from singular values: the n (1 <= n <= n_max) maximising
 /// sigma_{2n} / sigma_{2n+1} (Algorithm 1 step 4; 𝒴 has rank 2n).
