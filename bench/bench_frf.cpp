@@ -152,8 +152,7 @@ void BM_RefineSpectrum(benchmark::State& state) {
   so.order = 4;
   so.p = so.r = 50;
   const fdsid::StateSpace start = fdsid::identify_spectrum(d, so).model;
-  d.variance.resize(M + 1);
-  for (int k = 0; k <= M; ++k) d.variance(k) = 1e-6 * std::norm(fdsid::akcay_noise_filter(std::polar(1.0, M_PI * k / M)));
+  d.variance = fdsid::akcay_noise_variance(M, 1e-3);
   for (auto _ : state) {
     const fdsid::SpectrumRefineResult r = fdsid::refine_spectrum(d, start);
     benchmark::DoNotOptimize(r.cost);

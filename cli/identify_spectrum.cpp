@@ -37,9 +37,7 @@ nlohmann::json refinement_json(const SpectrumRefineResult& r, const SpectrumResu
                       {"max_zero_modulus", r.max_zero_modulus},
                       {"warnings", r.warnings}};
   nlohmann::json a = model_to_json(start.model);
-  nlohmann::json poles = nlohmann::json::array();
-  for (const cplx& z : fdsid::poles(start.model)) poles.push_back({z.real(), z.imag()});
-  a["poles"] = poles;
+  a["poles"] = poles_to_json(start.model);
   j["algorithm1_model"] = a;
   return j;
 }

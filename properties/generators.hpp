@@ -119,6 +119,18 @@ inline SpectrumData noise_free(const StateSpace& sys, int M) {
   return d;
 }
 
+/// A fixed 2 × 2 factor of order 3 meeting Assumption 2.1 (a complex pair and
+/// a real pole): the unit tests' MIMO case (the property suite draws random ones).
+inline SystemSpec mimo_2x2_spec() {
+  SystemSpec a;
+  a.channels = 2;
+  a.modes = {{0.7, 0.9, false}, {0.5, 0.0, true}};
+  a.mixing = {0.2, -0.5, 0.1, 0.4, 0.3, -0.2, 0.6, -0.1, 0.5};
+  a.b = {0.9, -0.2, 0.4, 0.8, -0.6, 0.3};
+  a.c = {0.5, -0.7, 0.2, 0.3, 0.6, -0.9};
+  return a;
+}
+
 /// Largest distance from a pole of `truth` to the nearest pole of `estimate`.
 inline double pole_error(const StateSpace& truth, const StateSpace& estimate) {
   const Eigen::VectorXcd a = poles(truth), b = poles(estimate);

@@ -222,19 +222,10 @@ double spectrum_error(const StateSpace& g, const Eigen::MatrixXcd& truth, int m,
 // Refine.ExactDataStayExact (the modal form's different rounding path; S = G Gᴴ
 // adds one product per entry) — stable, minimum phase, at no larger cost.
 TEST(RefineSpectrum, ExactSamplesStayExactSisoAndMimo) {
-  testing::SystemSpec a;
-  a.channels = 2;
-  a.modes = {{0.7, 0.9, false}, {0.5, 0.0, true}};
-  a.mixing = {0.2, -0.5, 0.1, 0.4, 0.3, -0.2, 0.6, -0.1, 0.5};
-  a.b = {0.9, -0.2, 0.4, 0.8, -0.6, 0.3};
-  a.c = {0.5, -0.7, 0.2, 0.3, 0.6, -0.9};
-  for (const StateSpace& sys : {akcay_example_system(), testing::make_system(a)}) {
+  for (const StateSpace& sys : {akcay_example_system(), testing::make_system(testing::mimo_2x2_spec())}) {
     SCOPED_TRACE("m = " + std::to_string(sys.outputs()));
     const int M = 200, m = sys.outputs();
-    SpectrumData d;
-    d.m = m;
-    d.M = M;
-    d.S = sample_spectrum(sys, M);
+    const SpectrumData d = testing::noise_free(sys, M);
     SpectrumOptions so;
     so.order = sys.order();
     const SpectrumResult start = identify_spectrum(d, so);
@@ -267,8 +258,7 @@ TEST(RefineSpectrumMonteCarlo, WeightedRefinementIsTheGlobalOptimumAndBeatsAlgor
   const int M = 1000, runs = 60;
   const double eps = 1e-3;
   const Eigen::MatrixXcd clean = sample_spectrum(truth, M);
-  Eigen::VectorXd variance(M + 1);
-  for (int k = 0; k <= M; ++k) variance(k) = eps * eps * std::norm(akcay_noise_filter(std::polar(1.0, M_PI * k / M)));
+  const Eigen::VectorXd variance = akcay_noise_variance(M, eps);
   SpectrumOptions so;
   so.order = 4;
   so.p = so.r = 50;

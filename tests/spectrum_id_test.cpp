@@ -112,12 +112,7 @@ TEST(Akcay2011, ReadsTheOrderOfThePaperSystemFromTheGap) {
 TEST(Akcay2011, InterpolatesMimoSystems) {
   // 2x2 and 3x3 systems meeting Assumption 2.1, fixed here (the property suite
   // draws random ones).
-  testing::SystemSpec a;
-  a.channels = 2;
-  a.modes = {{0.7, 0.9, false}, {0.5, 0.0, true}};
-  a.mixing = {0.2, -0.5, 0.1, 0.4, 0.3, -0.2, 0.6, -0.1, 0.5};
-  a.b = {0.9, -0.2, 0.4, 0.8, -0.6, 0.3};
-  a.c = {0.5, -0.7, 0.2, 0.3, 0.6, -0.9};
+  const testing::SystemSpec a = testing::mimo_2x2_spec();
   testing::SystemSpec b = a;
   b.channels = 3;
   b.modes = {{0.85, 2.2, false}, {0.3, 0.0, false}, {0.6, 0.4, false}};

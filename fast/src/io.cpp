@@ -250,6 +250,12 @@ nlohmann::json model_to_json(const StateSpace& m) {
           {"B", matrix_to_json(m.B)},       {"C", matrix_to_json(m.C)},       {"D", matrix_to_json(m.D)}};
 }
 
+nlohmann::json poles_to_json(const StateSpace& model) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const cplx& z : poles(model)) out.push_back({z.real(), z.imag()});
+  return out;
+}
+
 nlohmann::json result_to_json(const SpectrumResult& r) {
   nlohmann::json j = model_to_json(r.model);
   j["order"] = r.order;
@@ -263,9 +269,7 @@ nlohmann::json result_to_json(const SpectrumResult& r) {
   j["order_selection"] = {{"from_data", r.order_from_data},
                           {"gap", {{"index", r.gap_index}, {"ratio", r.gap_ratio}}},
                           {"rule", "n maximising sigma_{2n}/sigma_{2n+1}"}};
-  nlohmann::json poles = nlohmann::json::array();
-  for (const cplx& z : fdsid::poles(r.model)) poles.push_back({z.real(), z.imag()});
-  j["poles"] = poles;
+  j["poles"] = poles_to_json(r.model);
   j["summands"] = {{"E", matrix_to_json(r.summands.E)}, {"F", matrix_to_json(r.summands.F)},
                    {"P", matrix_to_json(r.summands.P)}};
   j["diagnostics"] = {{"split_margin", r.split_margin},

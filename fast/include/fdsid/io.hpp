@@ -18,6 +18,8 @@ namespace fdsid {
 StateSpace model_from_json(const nlohmann::json& j, const std::string& where = "model");
 StateSpace read_model(const std::string& path);
 nlohmann::json model_to_json(const StateSpace& model);
+/// The model's poles as [[re, im], ...] (the "poles" field of an identified model).
+nlohmann::json poles_to_json(const StateSpace& model);
 
 /// Identified-model JSON: the model plus order, method, singular values, poles
 /// and the diagnostics of every step.

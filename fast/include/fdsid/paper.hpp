@@ -21,6 +21,11 @@ StateSpace akcay_example_system();
 /// (z^2 - 1.1111 z + 0.8520): s̃_k = ε H(z_k) v_k.
 cplx akcay_noise_filter(cplx z);
 
+/// The variance E|ε H(z_k) v_k|² = ε²|H(z_k)|² (E|v|² = 1) of Section 4's noise
+/// at the M+1 samples z_k = e^{iπk/M}: the weights of the refined Table 2
+/// (SpectrumData::variance).
+Eigen::VectorXd akcay_noise_variance(int M, double epsilon);
+
 struct Table1Row {
   int M = 0;
   Eigen::VectorXd vo_sigmas;     ///< singular values of Ĝ_9 F_8 (Eq. 13)
