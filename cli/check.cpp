@@ -54,9 +54,10 @@ void register_check(CLI::App& app, Action& chosen) {
   chk->add_option("--tolerance", q.tolerance, "relative tolerance (default: derived, see README)");
   chk->add_option("--r", q.r, "FRF/records: r of the candidate when its JSON has none (default: V_SUB selection)")
       ->check(CLI::Range(2, 100000));
-  chk->add_option("--method", q.method, "FRF/records, continuous time: bilinear or orthogonal when the JSON has none")
-      ->check(CLI::IsMember({"bilinear", "orthogonal"}));
-  chk->add_option("--omega-scale", q.omega_scale, "FRF/records, continuous time: omega_scale when the JSON has none")
+  chk->add_option("--method", q.method,
+                  "FRF/records: the basis when the JSON has none (continuous time: bilinear or orthogonal; discrete "
+                  "time: monomial, bilinear or orthogonal)");
+  chk->add_option("--omega-scale", q.omega_scale, "FRF/records, Algorithm 2's bases: omega_scale when the JSON has none")
       ->check(CLI::PositiveNumber);
   auto* eiv = chk->add_flag("--eiv", q.eiv, "records: the candidate was identified with --eiv (when its JSON has no source)");
   chk->add_flag("--eiv-model-variance", q.eiv_model_variance, "records: ... with --eiv --eiv-variance model")->needs(eiv);

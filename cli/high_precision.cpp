@@ -244,8 +244,8 @@ json frf_high_json(const reference::FrfResult& res, const FrfHighRequest& q, con
   json j = reference::model_to_json(res.model, digits);
   j["order"] = res.order;
   j["r"] = res.r;
-  j["method"] = q.continuous ? std::string("pintelon2002-alg2-") + (q.orthogonal ? "orthogonal" : "bilinear")
-                             : std::string("pintelon2002-alg1");
+  j["method"] = frf_method_name(q.continuous ? Domain::Continuous : Domain::Discrete,
+                                q.orthogonal ? ContinuousMethod::Orthogonal : ContinuousMethod::Bilinear, q.discrete);
   json sv = json::array();
   for (const auto& s : res.singular_values) sv.push_back(reference::to_decimal(s, digits));
   j["singular_values"] = sv;
@@ -281,6 +281,7 @@ reference::FrfResult reference_frf(const FrfHighRequest& q, const reference::Rea
     o.order = q.order;
     o.r = q.r;
     o.continuous_method = q.orthogonal ? "orthogonal" : "bilinear";
+    o.discrete_method = to_string(q.discrete);
     if (q.omega_scale > 0) o.omega_scale = exact(q.omega_scale);
     o.backward_perturbation = perturbation;
     o.perturbation_seed = seed;
@@ -370,18 +371,23 @@ T setting(const char* name, const T& from_json, const T& from_cli, const T& none
 }
 
 // Reads the candidate's method name: empty, "discrete" (Algorithm 1),
+// "discrete-bilinear" / "discrete-orthogonal" (discrete data in Algorithm 2's
+// bases, DiscreteMethod),
 // "bilinear" or "orthogonal" (Algorithm 2.1 / 2.2).
 std::string candidate_method(const json& cj, const std::string& model_path) {
   if (!cj.contains("method")) return "";
   const std::string m = cj["method"].is_string() ? cj["method"].get<std::string>() : "";
   if (m == "pintelon2002-alg1") return "discrete";
+  if (m == "pintelon2002-alg1-bilinear") return "discrete-bilinear";
+  if (m == "pintelon2002-alg1-orthogonal") return "discrete-orthogonal";
   if (m == "pintelon2002-alg2-bilinear") return "bilinear";
   if (m == "pintelon2002-alg2-orthogonal") return "orthogonal";
   if (m == "akcay2011" || m == "vo1997")
     throw Error(ErrorKind::Input, model_path + " field \"method\"",
                 "\"" + m + "\" is a spectral factor; check it against its spectrum with --data SPECTRUM.csv");
   throw Error(ErrorKind::Input, model_path + " field \"method\"",
-              "is not pintelon2002-alg1, pintelon2002-alg2-bilinear or pintelon2002-alg2-orthogonal");
+              "is not pintelon2002-alg1, pintelon2002-alg1-bilinear, pintelon2002-alg1-orthogonal, "
+              "pintelon2002-alg2-bilinear or pintelon2002-alg2-orthogonal");
 }
 
 }  // namespace
@@ -470,6 +476,7 @@ RecordSettings record_settings(const json& cj, const FrfCheckRequest& q) {
 struct CandidateSettings {
   Domain domain = Domain::Discrete;
   ContinuousMethod method = ContinuousMethod::Bilinear;
+  DiscreteMethod discrete = DiscreteMethod::Monomial;
   int r = 0;          ///< 0 until chosen
   double ws = 0;      ///< ω_s; 0 until the data give the default
   RecordSettings rec;
@@ -511,13 +518,19 @@ CandidateSettings candidate_settings(const json& cj, const FrfCheckRequest& q, c
   const std::string jm = candidate_method(cj, q.model_path);
   if (c.domain == Domain::Discrete && (jm == "bilinear" || jm == "orthogonal"))
     throw Error(ErrorKind::Input, q.model_path, "a discrete-time model with a continuous-time method \"" + jm + "\"");
-  if (c.domain == Domain::Continuous && jm == "discrete")
-    throw Error(ErrorKind::Input, q.model_path, "a continuous-time model with method pintelon2002-alg1 (discrete time)");
-  if (c.domain == Domain::Discrete && !q.method.empty())
-    throw Error(ErrorKind::Input, "--method", "applies to continuous-time candidates only");
+  if (c.domain == Domain::Continuous && jm.rfind("discrete", 0) == 0)
+    throw Error(ErrorKind::Input, q.model_path, "a continuous-time model with a discrete-time method (pintelon2002-alg1)");
+  // The candidate's basis in --method's words (monomial/bilinear in discrete time).
+  const std::string jm_cli = jm == "discrete" ? "monomial" : jm.rfind("discrete-", 0) == 0 ? jm.substr(9) : jm;
+  FrfOptions chosen;
+  set_frf_method(q.method, c.domain, chosen);  // a name of the other domain: refused as such
   const std::string method_s =
-      c.domain == Domain::Discrete ? "" : setting<std::string>("method", jm, q.method, "", q.model_path, jm, q.method);
-  c.method = method_s == "orthogonal" ? ContinuousMethod::Orthogonal : ContinuousMethod::Bilinear;
+      setting<std::string>("method", jm_cli, q.method, "", q.model_path, jm_cli, q.method);
+  set_frf_method(method_s, c.domain, chosen);
+  c.method = chosen.continuous;
+  c.discrete = chosen.discrete;
+  if (c.domain == Domain::Continuous && method_s.empty())
+    c.note += "method: bilinear (Algorithm 2.1; neither the candidate nor --method names one); ";
   if (c.domain == Domain::Continuous && method_s.empty())
     c.note += "method: bilinear (Algorithm 2.1; neither the candidate nor --method names one); ";
   const int json_r = int_field(cj, "r", q.model_path);
@@ -561,11 +574,14 @@ FrfData data_and_settings(const FrfCheckRequest& q, const StateSpace& candidate,
                     " outputs; the data have " + std::to_string(data.inputs()) + " and " +
                     std::to_string(data.outputs()));
   if (c.domain == Domain::Continuous && c.ws == 0) c.ws = std::sqrt(data.omega.minCoeff() * data.omega.maxCoeff());
+  if (c.domain == Domain::Discrete && c.discrete != DiscreteMethod::Monomial && c.ws == 0)
+    c.ws = default_discrete_scale(data.omega);
   if (c.r > 0 && c.rec.treatment == RecordTreatment::Plain) return data;
   FrfOptions o;
   o.order = candidate.order();
   o.r = c.r;
   o.continuous = c.method;
+  o.discrete = c.discrete;
   o.omega_scale = c.ws;
   try {
     if (from_frf) {
@@ -592,6 +608,7 @@ int supported_order(const FrfData& data, const CandidateSettings& c) {
   o.order = 0;
   o.r = c.r;
   o.continuous = c.method;
+  o.discrete = c.discrete;
   o.omega_scale = c.ws;
   try {
     return identify_frf(data, o).order;
@@ -617,6 +634,7 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
   hq.meta_path = q.meta_path;
   hq.continuous = c.domain == Domain::Continuous;
   hq.orthogonal = c.method == ContinuousMethod::Orthogonal;
+  hq.discrete = c.discrete;
   hq.omega_scale = c.ws;
   hq.order = candidate.order();
   hq.r = c.r;
@@ -653,7 +671,7 @@ int check_frf(const std::string& json_path, const FrfCheckRequest& q) {
   k.domain = c.domain;
   k.method = c.method;
   k.omega_scale = c.ws;
-  k.method_name = frf_method_name(c.domain, c.method);
+  k.method_name = frf_method_name(c.domain, c.method, c.discrete);
   if (!c.note.empty()) k.settings_note = c.note.substr(0, c.note.size() - 2);
   k.reference_model = frf_high_json(res, hq, where, "");
   StateSpace ref = model_from_json(k.reference_model, "reference model");  // decimal strings, correctly rounded

@@ -59,6 +59,7 @@ struct FrfHighRequest {
   std::string data_path, meta_path;  ///< periodic records + meta, or empty
   bool continuous = false;
   bool orthogonal = false;
+  DiscreteMethod discrete = DiscreteMethod::Monomial;  ///< discrete time: the basis (--method)
   double omega_scale = 0;
   int order = 0, r = 0;
   /// Records only: Section 5's treatment (errors-in-variables, improper), as identify-frf applies it.

@@ -21,7 +21,7 @@ struct IdentifyFrfCommand {
   std::string frf_path, data_path, meta_path, json_path, plot_path;
   FrfOptions options;  // order 0 = auto, r 0 = minimise V_SUB
   Domain domain = Domain::Discrete;
-  ContinuousMethod method = ContinuousMethod::Bilinear;
+  std::string method;  ///< --method; empty: the domain's default (set_frf_method)
   Precision precision = Precision::Double;
   EivVariance eiv_variance = EivVariance::Data;
   double min_input_snr = 10;
@@ -152,13 +152,15 @@ int run_high(const IdentifyFrfCommand& c, const FrfData& data, const SampleStati
   q.meta_path = c.meta_path;
   q.selection = c.selection;
   q.continuous = c.domain == Domain::Continuous;
-  q.orthogonal = c.method == ContinuousMethod::Orthogonal;
+  FrfOptions chosen = c.options;
+  set_frf_method(c.method, c.domain, chosen);
+  q.orthogonal = chosen.continuous == ContinuousMethod::Orthogonal;
+  q.discrete = chosen.discrete;
   q.omega_scale = c.options.omega_scale;
   std::string note;
   OrderAndR sel{c.options.order, c.options.r};
   if (sel.order == 0 || sel.r == 0) {
-    FrfOptions o = c.options;
-    o.continuous = c.method;  // the selection with the method the reference will use
+    const FrfOptions& o = chosen;  // the selection with the method the reference will use
     try {
       if (source.treatment == RecordTreatment::Plain) {
         sel = select_order_and_r(data, o);
@@ -205,7 +207,7 @@ int run(const IdentifyFrfCommand& c) {
   refuse_overwrite(c.json_path, {c.frf_path, c.data_path, c.meta_path}, "--json");
   Out out{c.json_path == "-"};
   FrfOptions o = c.options;
-  o.continuous = c.method;
+  set_frf_method(c.method, c.domain, o);
   const std::string where = from_frf ? c.frf_path : c.data_path;
 
   FrfSource source;
@@ -243,7 +245,7 @@ int run(const IdentifyFrfCommand& c) {
   }
   if (c.precision == Precision::High) return run_high(c, data, stats, source, where);
 
-  const std::string method = frf_method_name(c.domain, c.method);
+  const std::string method = frf_method_name(c.domain, o.continuous, o.discrete);
   FrfResult res;
   try {
     if (from_frf || !c.noise_std.empty()) {
@@ -355,11 +357,13 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
       ->transform(choice(std::map<std::string, Domain>{{"discrete", Domain::Discrete},
                                                        {"continuous", Domain::Continuous}},
                          "is neither discrete nor continuous"));
-  idf->add_option("--method", c->method, "continuous time: bilinear (Algorithm 2.1, default) or orthogonal (2.2)")
-      ->transform(choice(std::map<std::string, ContinuousMethod>{{"bilinear", ContinuousMethod::Bilinear},
-                                                                 {"orthogonal", ContinuousMethod::Orthogonal}},
-                         "is not bilinear or orthogonal"));
-  idf->add_option("--omega-scale", o.omega_scale, "frequency scaling of Algorithm 2 (default sqrt(w_min w_max))");
+  idf->add_option("--method", c->method,
+                  "the basis: continuous time bilinear (Algorithm 2.1, default) or orthogonal (2.2); discrete time "
+                  "monomial (Algorithm 1, default) or bilinear (Algorithm 2.1 on the Tustin frequencies tan(omega/2): "
+                  "for a band that covers a small arc of the unit circle)");
+  idf->add_option("--omega-scale", o.omega_scale,
+                  "frequency scaling of Algorithm 2 (default sqrt(w_min w_max); discrete bilinear: rad/sample in (0, pi), "
+                  "default 2 atan sqrt(tan(w_min/2) tan(w_max/2)))");
   idf->add_option("--precision", c->precision, "double (default) or high")
       ->transform(choice(kPrecisions, "is not double or high"));
   auto* eiv = idf->add_flag("--eiv", c->eiv,

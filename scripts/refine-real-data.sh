@@ -41,6 +41,17 @@ for order in 12 16 24; do
     --output Acceleration1 --skip-periods 5
 done
 
+echo "== F-16 GVT Level 1 as above, discrete time in Algorithm 2's bases on the Tustin frequencies (narrow band)"
+for method in bilinear orthogonal; do
+  for order in 16 20; do
+    echo " --method $method, order $order"
+    one --data "$F/F16Data_FullMSine_Level1.csv" --meta "$F/F16Data_FullMSine.meta.json" --input Voltage \
+      --output Acceleration1 --skip-periods 1 --use-periods 4 --method $method --order $order -- \
+      --data "$F/F16Data_FullMSine_Level1.csv" --meta "$F/F16Data_FullMSine.meta.json" --input Voltage \
+      --output Acceleration1 --skip-periods 5
+  done
+done
+
 echo "== silverbox: order 2 from block A, held out: block B"
 S=$D/silverbox
 one --data "$S/Schroeder80mV_blockA_11periods.csv" --meta "$S/Schroeder80mV_blockA_11periods.meta.json" --order 2 -- \

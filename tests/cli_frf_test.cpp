@@ -828,10 +828,14 @@ void expect_verdict(const RunResult& r, bool agree, const json& j) {
 TEST_F(CliFrf, CheckAgreesWithACorrectCandidateInEveryDomainAndMethod) {
   const std::string d = write("d.csv", noisy_frf_csv(pintelon_plant(), discrete_grid(60), 1e-2));
   const std::string c = write("c.csv", noisy_frf_csv(continuous_plant(), continuous_grid(60), 1e-2));
+  std::vector<double> narrow;  // 6.4 % of [0, pi] around the resonance at 0.47 rad/sample (issue 15, item 4)
+  for (int k = 0; k < 60; ++k) narrow.push_back(0.3 + 0.2 * k / 59.0);
+  const std::string nb = write("nb.csv", noisy_frf_csv(pintelon_plant(), narrow, 1e-2));
   struct Case {
     std::string name, frf, domain, method;
   };
-  for (const Case& k : {Case{"discrete", d, "discrete", "bilinear"}, Case{"bilinear", c, "continuous", "bilinear"},
+  for (const Case& k : {Case{"discrete", d, "discrete", "monomial"}, Case{"discrete-bilinear", nb, "discrete", "bilinear"},
+                        Case{"discrete-orthogonal", nb, "discrete", "orthogonal"}, Case{"bilinear", c, "continuous", "bilinear"},
                         Case{"orthogonal", c, "continuous", "orthogonal"}}) {
     SCOPED_TRACE(k.name);
     const std::string cand = path(k.name + ".json");
@@ -841,7 +845,9 @@ TEST_F(CliFrf, CheckAgreesWithACorrectCandidateInEveryDomainAndMethod) {
     const json j = read_json(k.name + ".check.json");
     expect_verdict(r, true, j);
     EXPECT_EQ(j["r"], 8);
-    EXPECT_EQ(j["method"], k.domain == "discrete" ? "pintelon2002-alg1" : "pintelon2002-alg2-" + k.method);
+    EXPECT_EQ(j["method"], k.name == "discrete"   ? std::string("pintelon2002-alg1")
+                           : k.domain == "discrete" ? "pintelon2002-alg1-" + k.method
+                                                    : "pintelon2002-alg2-" + k.method);
   }
   // Records: the sample means and variances over the periods (Section 4.1).
   simulate(64, 6, 1e-3, "rec");
@@ -944,8 +950,32 @@ TEST_F(CliFrf, ANarrowBandNamesTheBandNotTheVariances) {
   for (int k = 0; k < 40; ++k) omega.push_back(0.05 + 0.05 * k / 39.0);  // 1.6 % of [0, pi]
   const std::string f = write("narrow.csv", frf_csv(pintelon_plant(), omega, 1e-6));
   const RunResult r = run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--r", "30"});
-  EXPECT_TRUE(IsBadInput(r, {"rad/sample", "% of [0, pi]", "--r", "--domain continuous"}));
+  EXPECT_TRUE(IsBadInput(r, {"rad/sample", "% of [0, pi]", "--r", "--method bilinear", "--domain continuous"}));
   EXPECT_EQ(r.err.find("variances too small"), std::string::npos) << r.err;
+  // The fix it names (issue 15, item 4): the bilinear basis on the Tustin
+  // frequencies identifies the same file, in double and in 50 digits, with the
+  // same poles (the noise is 1e-3 relative: both are estimates of one model).
+  const RunResult b = run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--r", "12", "--method", "bilinear",
+                                 "--json", path("nb.json")});
+  ASSERT_TRUE(Succeeded(b)) << describe(b);
+  const json jb = read_json("nb.json");
+  EXPECT_EQ(jb["method"], "pintelon2002-alg1-bilinear");
+  EXPECT_EQ(jb["domain"], "discrete");
+  EXPECT_GT(jb["omega_scale"].get<double>(), 0.05);
+  EXPECT_LT(jb["omega_scale"].get<double>(), 0.1);
+  const RunResult h = run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--r", "12", "--method", "bilinear",
+                                 "--precision", "high", "--json", path("nbh.json")});
+  ASSERT_TRUE(Succeeded(h)) << describe(h);
+  EXPECT_EQ(read_json("nbh.json")["method"], "pintelon2002-alg1-bilinear");
+  // Algorithm 2.2's orthogonal bases on the same axis tan(omega/2).
+  const RunResult o = run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--r", "12", "--method", "orthogonal",
+                                 "--json", path("nbo.json")});
+  ASSERT_TRUE(Succeeded(o)) << describe(o);
+  EXPECT_EQ(read_json("nbo.json")["method"], "pintelon2002-alg1-orthogonal");
+  // A name of the other domain is refused by name, before any work.
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--method", "monomial", "--domain",
+                                    "continuous"}),
+                         {"--method", "discrete-time"}));
 }
 
 // identify-frf --precision high repeats Section 5's treatments as check does:
@@ -974,8 +1004,11 @@ TEST_F(CliFrf, CheckRefusesWhatItCannotCompare) {
   ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--frf", d, "--order", "4", "--r", "8", "--json", path("c.json")})));
   const std::string cand = path("c.json");
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cand, "--frf", d, "--r", "9"}), {"--r", "contradicts", "8"}));
+  // The candidate's basis is Algorithm 1's monomial one: another basis contradicts it.
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cand, "--frf", d, "--method", "orthogonal"}),
-                         {"--method", "continuous-time"}));
+                         {"--method", "contradicts", "monomial"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cand, "--frf", d, "--method", "spline"}),
+                         {"--method", "not monomial, bilinear or orthogonal"}));
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cand}), {"--frf"}));
   json spectral = read_json("c.json");
   spectral["method"] = "akcay2011";

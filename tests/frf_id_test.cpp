@@ -219,6 +219,157 @@ TEST(BilinearToContinuous, MatchesTheWDomainModelOnTheImaginaryAxis) {
 }
 
 // ---------------------------------------------------------------------------
+// Narrow-band discrete data (issue 15, item 4). On a small arc of the unit
+// circle the powers of z are numerically dependent; Algorithm 2's bases on
+// the Tustin frequencies tan(ω/2) identify the same noise-free data to the
+// rounding tolerance of frf_tolerance.hpp.
+
+// Lightly damped modes at the given angles (rad/sample), pole radius `rho`,
+// real modal form, D = 0.1: a structure whose resonances lie in the band.
+StateSpace modes_at(const std::vector<double>& theta, double rho) {
+  const int n = 2 * static_cast<int>(theta.size());
+  StateSpace s;
+  s.A = Eigen::MatrixXd::Zero(n, n);
+  s.B.resize(n, 1);
+  s.C.resize(1, n);
+  for (size_t i = 0; i < theta.size(); ++i) {
+    const double re = rho * std::cos(theta[i]), im = rho * std::sin(theta[i]);
+    s.A.block(2 * i, 2 * i, 2, 2) << re, im, -im, re;
+    s.B.block(2 * i, 0, 2, 1) << 0.3, 0.1 * (i + 1);
+    s.C.block(0, 2 * i, 1, 2) << 0.2, -0.05 * (i + 1);
+  }
+  s.D = Eigen::MatrixXd::Constant(1, 1, 0.1);
+  return s;
+}
+
+// The noise-free check of a Tustin-basis estimate, printed.
+void expect_tustin_noise_free(const StateSpace& truth, const FrfResult& res, const FrfData& d, DiscreteMethod m) {
+  ASSERT_EQ(res.order, truth.order());
+  EXPECT_EQ(res.model.domain, Domain::Discrete);
+  const testing::NoiseFreeCheck c = check_noise_free(truth, res, d, ContinuousMethod::Bilinear, 0, -1, m);
+  EXPECT_LE(c.g_ratio, 1.0) << c.describe();
+  EXPECT_LE(c.pole_ratio, 1.0) << c.describe();
+  std::cout << "  [measured] " << to_string(m) << ": " << c.describe() << "\n";
+  // The tolerance still detects a wrong estimate (a pole moved by 1e-4).
+  EXPECT_LT(c.eps_A, 1e-6) << "tolerance too loose to detect anything";
+}
+
+// The F-16 record's band: 2-15 Hz at 400 Hz, 6.5 % of [0, π], a ratio of 7.5
+// on the Tustin axis, with three modes inside. r = 14 powers of z are
+// dependent; the bilinear basis spreads the band over ~1.7 rad of the circle.
+TEST(FrfNoiseFree, NarrowBandDiscreteBilinearBasis) {
+  std::mt19937_64 rng(64);
+  const StateSpace sys = modes_at({0.06, 0.12, 0.2}, 0.99);
+  const Eigen::VectorXd w = random_grid(rng, 100, 2 * M_PI * 2 / 400, 2 * M_PI * 15 / 400);
+  const FrfData d = noise_free_frf(sys, w);
+  const FrfResult res = identify_frf_fixed(d, 6, 14, ContinuousMethod::Bilinear, 0, DiscreteMethod::Bilinear);
+  // ω_s by default_discrete_scale: tan(ω_s/2) is the geometric mean of the band edges' tan(ω/2).
+  EXPECT_NEAR(std::tan(res.omega_scale / 2), std::sqrt(std::tan(w.minCoeff() / 2) * std::tan(w.maxCoeff() / 2)),
+              8 * kU * std::tan(res.omega_scale / 2));
+  expect_tustin_noise_free(sys, res, d, DiscreteMethod::Bilinear);
+  // Algorithm 1's monomial basis on the same data: refused as rank deficient
+  // (naming the fix), or usable to far fewer digits.
+  try {
+    const FrfResult mono = identify_frf_fixed(d, 6, 14);
+    std::cout << "  [measured] monomial error_estimate " << mono.error_estimate << " vs bilinear "
+              << res.error_estimate << "\n";
+    EXPECT_GT(mono.error_estimate, 1e3 * res.error_estimate);
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Numerical) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--method bilinear"), std::string::npos) << e.what();
+    std::cout << "  [measured] monomial: " << e.what() << "\n";
+  }
+  // The automatic order and r (Section 5) with the bilinear basis.
+  FrfOptions o;
+  o.discrete = DiscreteMethod::Bilinear;
+  const FrfResult automatic = identify_frf(noise_free_frf(sys, w, 1e-20), o);
+  EXPECT_EQ(automatic.order, 6);
+}
+
+// A band narrow in ratio too: [0.3, 0.5] rad/sample, tan ratio 1.7. Real
+// Möbius maps only scale s', so the bilinear basis sees an arc of ~0.5 rad;
+// the orthogonal bases (Algorithm 2.2 on s̃ = j tan(ω/2)/t_s) stay conditioned.
+TEST(FrfNoiseFree, NarrowRatioBandDiscreteOrthogonalBasis) {
+  std::mt19937_64 rng(65);
+  const StateSpace sys = modes_at({0.35, 0.45}, 0.98);
+  const Eigen::VectorXd w = random_grid(rng, 100, 0.3, 0.5);
+  const FrfData d = noise_free_frf(sys, w);
+  const FrfResult res = identify_frf_fixed(d, 4, 10, ContinuousMethod::Bilinear, 0, DiscreteMethod::Orthogonal);
+  expect_tustin_noise_free(sys, res, d, DiscreteMethod::Orthogonal);
+  for (DiscreteMethod m : {DiscreteMethod::Monomial, DiscreteMethod::Bilinear}) {
+    try {
+      const FrfResult other = identify_frf_fixed(d, 4, 10, ContinuousMethod::Bilinear, 0, m);
+      std::cout << "  [measured] " << to_string(m) << " error_estimate " << other.error_estimate
+                << " vs orthogonal " << res.error_estimate << "\n";
+      EXPECT_GT(other.error_estimate, 1e3 * res.error_estimate) << to_string(m);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::Numerical) << e.what();
+      std::cout << "  [measured] " << to_string(m) << ": " << e.what() << "\n";
+    }
+  }
+  // ω = π has no place on the tan(ω/2) axis: refused by name.
+  Eigen::VectorXd wpi = w;
+  wpi(w.size() - 1) = M_PI;
+  try {
+    identify_frf_fixed(noise_free_frf(sys, wpi), 4, 10, ContinuousMethod::Bilinear, 0, DiscreteMethod::Orthogonal);
+    ADD_FAILURE() << "no error for omega = pi";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Input);
+    EXPECT_NE(std::string(e.what()).find("omega = pi"), std::string::npos) << e.what();
+  }
+}
+
+TEST(BilinearToDiscrete, MatchesTheWDomainModelOnTheUnitCircle) {
+  // G_z(e^{jω}) = G_w(w(ω)), w = (j tan(ω/2)/t_s − 1)/(j tan(ω/2)/t_s + 1).
+  // Tolerance: as BilinearToContinuous's, with the two solves of the
+  // back-transformation (frf_tolerance.hpp: relative ≤ 4n u cond(I − A')
+  // (1 + cond(I − A_w)) in A_z, B_z, C_z, D_z):
+  //   tol(ω) = 4n u [cond(I − A')(1 + cond(I − A_w)) s_z(z) + cond(wI − A_w) s_w(w) + cond(zI − A_z) s_z(z)].
+  std::mt19937_64 rng(6);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const int n = 5;
+  StateSpace w;
+  w.A = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) w.A(i, j) = 0.35 * u(rng);
+  w.B = Eigen::MatrixXd::NullaryExpr(n, 2, [&] { return u(rng); });
+  w.C = Eigen::MatrixXd::NullaryExpr(3, n, [&] { return u(rng); });
+  w.D = Eigen::MatrixXd::NullaryExpr(3, 2, [&] { return u(rng); });
+  ASSERT_LT(fdsid::testing::eigenvalues(w.A).cwiseAbs().maxCoeff(), 1.0);
+  const double ws = 0.2;
+  const StateSpace z = bilinear_to_discrete(w, ws);
+  EXPECT_EQ(z.domain, Domain::Discrete);
+  auto cond = [](const Eigen::MatrixXcd& X) {
+    const Eigen::VectorXd s = fdsid::testing::singular_values(Eigen::MatrixXcd(X));
+    return s(0) / s(s.size() - 1);
+  };
+  const Eigen::MatrixXcd I = Eigen::MatrixXcd::Identity(n, n);
+  const double c_back = cond(I - testing::continuous_to_bilinear(z, 1.0).A.cast<cplx>()) *
+                        (1 + cond(I - w.A.cast<cplx>()));
+  double worst = 0;
+  for (double om : {0.0, 1e-3, 0.05, 0.2, 0.7, 2.0, 3.0, M_PI}) {
+    const cplx wz = testing::tustin_point(om, ws), zz = std::polar(1.0, om);
+    const double err = (transfer(z, zz) - transfer(w, wz)).norm();
+    const double tol = 4 * n * kU *
+                       (c_back * testing::transfer_sensitivity(z, zz) +
+                        cond(wz * I - w.A.cast<cplx>()) * testing::transfer_sensitivity(w, wz) +
+                        cond(zz * I - z.A.cast<cplx>()) * testing::transfer_sensitivity(z, zz));
+    EXPECT_LE(err, tol) << "omega " << om;
+    worst = std::max(worst, err / tol);
+  }
+  std::cout << "  [measured] worst error / tolerance " << worst << "\n";
+  // A w-domain pole at w = 1 (z = −1) is refused.
+  StateSpace bad = w;
+  bad.A = Eigen::MatrixXd::Identity(n, n);
+  try {
+    bilinear_to_discrete(bad, ws);
+    ADD_FAILURE() << "no error for I - A_w = 0";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Numerical);
+  }
+}
+
+// ---------------------------------------------------------------------------
 // An unstable estimate is said so (issue 14): the subspace estimate
 // interpolates the data and does not enforce stability. Noise-free data of an
 // unstable system (its frequency response is defined on the grid) give back

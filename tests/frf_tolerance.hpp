@@ -20,6 +20,14 @@
 /// bilinear back-transformation, 4n u cond(I − Â_w) ‖Â_c‖ κ(Â_c).
 /// Continuous time maps these through ξ(s): bilinear w = (s̃ − 1)/(s̃ + 1),
 /// dλ_c/dλ_w = 2 ω_s / (1 − λ_w)²; orthogonal bases ξ = s̃ = s/ω_s, λ_c = ω_s λ̃.
+/// Discrete time, DiscreteMethod::Bilinear: z = (1 + s')/(1 − s'),
+/// s' = t_s (1 + w)/(1 − w), so dλ_z/dλ_w = [2/(1 − s')²] [2 t_s/(1 − λ_w)²];
+/// its two back-transformation steps round A' to ≤ 4n u cond(I − Â_w)
+/// relatively (as above) and A_z = 2(I − A')⁻¹ − I amplifies a relative
+/// change of A' by ≤ cond(I − A') and adds its own 4n u cond(I − A'):
+/// 4n u cond(I − A') (1 + cond(I − Â_w)) ‖Â_z‖ κ(Â_z) on the poles.
+/// DiscreteMethod::Orthogonal: s̃ = s'/t_s, dλ_z/dλ_s̃ = t_s · 2/(1 − s')², and
+/// the one step s' → z: 4n u cond(I − A') ‖Â_z‖ κ(Â_z).
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -64,6 +72,19 @@ inline StateSpace continuous_to_bilinear(const StateSpace& c, double omega_scale
 inline cplx bilinear_point(double omega, double omega_scale) {
   const cplx st(0.0, omega / omega_scale);
   return (st - 1.0) / (st + 1.0);
+}
+
+/// DiscreteMethod::Bilinear's w at z = e^{jω} (ω, ω_s in rad/sample): s' =
+/// j tan(ω/2), w = (s'/t_s − 1)/(s'/t_s + 1), t_s = tan(ω_s/2) — typed here
+/// from the definition, not from fast/.
+inline cplx tustin_point(double omega, double omega_scale) {
+  return bilinear_point(std::tan(omega / 2), std::tan(omega_scale / 2));
+}
+
+/// Inverse of bilinear_to_discrete: z → s' = (z − 1)/(z + 1) is
+/// continuous_to_bilinear with scale 1 (read z as s), then s' → w with t_s.
+inline StateSpace discrete_to_bilinear(const StateSpace& z, double omega_scale) {
+  return continuous_to_bilinear(continuous_to_bilinear(z, 1.0), std::tan(omega_scale / 2));
 }
 
 inline double spectral_norm(const Eigen::MatrixXcd& X) {
@@ -141,19 +162,29 @@ struct NoiseFreeCheck {
 /// for continuous time), and every true pole against the nearest estimated one.
 /// `truth_pole_accuracy`: absolute accuracy of the truth's computed poles; < 0
 /// means 4n u ‖A‖ κ(A) (the eigensolver's backward error, truth given directly).
+/// `discrete`: the basis of discrete-time data (ω_s read from res.omega_scale).
 inline NoiseFreeCheck check_noise_free(const StateSpace& truth, const FrfResult& res, const FrfData& d,
                                        ContinuousMethod method = ContinuousMethod::Bilinear, double omega_scale = 0,
-                                       double truth_pole_accuracy = -1) {
+                                       double truth_pole_accuracy = -1,
+                                       DiscreteMethod discrete = DiscreteMethod::Monomial) {
   NoiseFreeCheck out;
   const StateSpace& est = res.model;
   const int F = d.frequencies();
   out.eps_A = frf_qr_constant(F, d.columns(), res.r, d.inputs(), d.outputs()) * res.error_estimate;
   const bool cont = d.domain == Domain::Continuous;
   const double ws = cont ? (omega_scale > 0 ? omega_scale : std::sqrt(d.omega.minCoeff() * d.omega.maxCoeff())) : 1;
+  const bool tustin = !cont && discrete == DiscreteMethod::Bilinear;
+  const bool tustin_orth = !cont && discrete == DiscreteMethod::Orthogonal;
+  const double ts = tustin || tustin_orth ? std::tan(res.omega_scale / 2) : 1;
   // The model in the domain where Algorithm 1 ran (where error_estimate applies).
-  const StateSpace inner = !cont ? est : method == ContinuousMethod::Bilinear ? continuous_to_bilinear(est, ws)
-                                                                             : scaled(est, ws);
+  const StateSpace inner = tustin        ? discrete_to_bilinear(est, res.omega_scale)
+                           : tustin_orth ? scaled(continuous_to_bilinear(est, 1.0), ts)
+                           : !cont       ? est
+                           : method == ContinuousMethod::Bilinear ? continuous_to_bilinear(est, ws)
+                                                                  : scaled(est, ws);
   auto xi_of = [&](double w) -> cplx {
+    if (tustin) return tustin_point(w, res.omega_scale);
+    if (tustin_orth) return cplx(0.0, std::tan(w / 2) / ts);
     if (!cont) return std::polar(1.0, w);
     return method == ContinuousMethod::Bilinear ? bilinear_point(w, ws) : cplx(0.0, w / ws);
   };
@@ -193,6 +224,18 @@ inline NoiseFreeCheck check_noise_free(const StateSpace& truth, const FrfResult&
         fdsid::testing::singular_values(Eigen::MatrixXd(Eigen::MatrixXd::Identity(n, n) - inner.A));
     back = 4.0 * n * kU * sv(0) / sv(n - 1) * spectral_norm(est.A.cast<cplx>()) * eigenvalue_condition(est.A);
   }
+  if (tustin || tustin_orth) {
+    const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+    const Eigen::MatrixXd Ap = continuous_to_bilinear(est, 1.0).A;  // A' in s'
+    const Eigen::VectorXd sp = fdsid::testing::singular_values(Eigen::MatrixXd(I - Ap));
+    double first = 0;  // the w → s' step's relative error, amplified by the s' → z step
+    if (tustin) {
+      const Eigen::VectorXd sw = fdsid::testing::singular_values(Eigen::MatrixXd(I - inner.A));
+      first = sw(0) / sw(n - 1);
+    }
+    back = 4.0 * n * kU * sp(0) / sp(n - 1) * (1 + first) * spectral_norm(est.A.cast<cplx>()) *
+           eigenvalue_condition(est.A);
+  }
   Eigen::VectorXcd lam(n);
   Eigen::VectorXd tol_i(n);
   for (Eigen::Index i = 0; i < n; ++i) {
@@ -200,7 +243,15 @@ inline NoiseFreeCheck check_noise_free(const StateSpace& truth, const FrfResult&
     const double kappa = V.col(i).norm() * W.row(i).norm();
     double d = 1;
     lam(i) = mu;
-    if (cont && method == ContinuousMethod::Bilinear) {
+    if (tustin) {
+      const cplx sp = ts * (1.0 + mu) / (1.0 - mu);
+      lam(i) = (1.0 + sp) / (1.0 - sp);
+      d = 2.0 / std::norm(1.0 - sp) * 2 * ts / std::norm(1.0 - mu);
+    } else if (tustin_orth) {
+      const cplx sp = ts * mu;
+      lam(i) = (1.0 + sp) / (1.0 - sp);
+      d = ts * 2.0 / std::norm(1.0 - sp);
+    } else if (cont && method == ContinuousMethod::Bilinear) {
       lam(i) = ws * (1.0 + mu) / (1.0 - mu);
       d = 2 * ws / std::norm(1.0 - mu);
     } else if (cont) {

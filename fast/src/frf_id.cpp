@@ -104,6 +104,7 @@ struct Bases {
   Eigen::MatrixXd H;            // r × (r−1): s̃ q_j = Σ_i H(i, j) q_i (output basis)
   double q0 = 1;                // the constant q_0 of the output basis
   double omega_scale = 1;
+  bool tustin = false;          // discrete data in Algorithm 2's bases on s' = j tan(ω/2) (omega_scale in rad/sample)
 };
 
 double default_scale(const FrfData& d) {
@@ -157,22 +158,52 @@ Eigen::MatrixXcd arnoldi_basis(const Eigen::VectorXcd& s, const Eigen::VectorXd&
   return Q.transpose();
 }
 
-Bases make_bases(const FrfData& d, int r, ContinuousMethod method, double omega_scale) {
+Bases make_bases(const FrfData& d, int r, ContinuousMethod method, double omega_scale, DiscreteMethod discrete) {
   Bases b;
   const Eigen::Index F = d.frequencies();
   b.xi.resize(F);
-  if (d.domain == Domain::Discrete) {
+  if (d.domain == Domain::Discrete && discrete == DiscreteMethod::Monomial) {
     for (Eigen::Index k = 0; k < F; ++k) b.xi(k) = std::polar(1.0, d.omega(k));
     b.Wu = powers(b.xi, r);
     b.Wy = b.Wu;
     return b;
   }
-  b.omega_scale = omega_scale > 0 ? omega_scale : default_scale(d);
-  if (!(b.omega_scale > 0) || !std::isfinite(b.omega_scale))
-    fail(ErrorKind::Input, "omega_scale", "must be positive and finite, got " + fmt(b.omega_scale, 6));
-  if (method == ContinuousMethod::Bilinear) {
+  // Algorithm 2's frequency axis: x_k = ω_k/ω_s (continuous time) or
+  // tan(ω_k/2)/t_s, t_s = tan(ω_s/2) (discrete data, Tustin: s' = j tan(ω/2)).
+  Eigen::VectorXd x(F);
+  if (d.domain == Domain::Discrete) {
+    b.tustin = true;
+    b.omega_scale = omega_scale > 0 ? omega_scale : default_discrete_scale(d.omega);
+    if (!(b.omega_scale > 0 && b.omega_scale < M_PI))
+      fail(ErrorKind::Input, "omega_scale", "discrete time: must lie in (0, pi) rad/sample, got " + fmt(b.omega_scale, 6));
+    const double ts = std::tan(b.omega_scale / 2);
+    if (discrete == DiscreteMethod::Bilinear) {
+      // w = (jx − 1)/(jx + 1), written with sin and cos of ω/2 so that ω = π
+      // (s' = ∞) gives w = 1.
+      for (Eigen::Index k = 0; k < F; ++k) {
+        const cplx st(0.0, std::sin(d.omega(k) / 2));
+        const double ct = ts * std::cos(d.omega(k) / 2);
+        b.xi(k) = (st - ct) / (st + ct);
+      }
+      b.Wu = powers(b.xi, r);
+      b.Wy = b.Wu;
+      return b;
+    }
     for (Eigen::Index k = 0; k < F; ++k) {
-      const cplx st(0.0, d.omega(k) / b.omega_scale);
+      if (!(d.omega(k) < M_PI))
+        fail(ErrorKind::Input, "omega", "the line at omega = pi maps to s' = tan(omega/2) = infinity, outside the "
+                                        "orthogonal bases: drop it, or use --method bilinear");
+      x(k) = std::tan(d.omega(k) / 2) / ts;
+    }
+  } else {
+    b.omega_scale = omega_scale > 0 ? omega_scale : default_scale(d);
+    if (!(b.omega_scale > 0) || !std::isfinite(b.omega_scale))
+      fail(ErrorKind::Input, "omega_scale", "must be positive and finite, got " + fmt(b.omega_scale, 6));
+    x = d.omega / b.omega_scale;
+  }
+  if (d.domain == Domain::Continuous && method == ContinuousMethod::Bilinear) {
+    for (Eigen::Index k = 0; k < F; ++k) {
+      const cplx st(0.0, x(k));
       b.xi(k) = (st - 1.0) / (st + 1.0);
     }
     b.Wu = powers(b.xi, r);
@@ -180,7 +211,7 @@ Bases make_bases(const FrfData& d, int r, ContinuousMethod method, double omega_
     return b;
   }
   b.orthogonal = true;
-  for (Eigen::Index k = 0; k < F; ++k) b.xi(k) = cplx(0.0, d.omega(k) / b.omega_scale);
+  for (Eigen::Index k = 0; k < F; ++k) b.xi(k) = cplx(0.0, x(k));
   Eigen::VectorXd wu(F), wy(F);
   for (Eigen::Index k = 0; k < F; ++k) {
     wu(k) = d.U[k].squaredNorm();
@@ -240,13 +271,18 @@ void step1_check_size(const FrfData& d, int r) {
 // Where the data lie, for the messages of step 1 (review finding 13: a basis
 // numerically dependent on a narrow band was reported as "variances too
 // small"): the band and what to do about it.
-std::string band_advice(const FrfData& d, int r) {
+std::string band_advice(const FrfData& d, const Bases& b, int r) {
   const double lo = d.omega.minCoeff(), hi = d.omega.maxCoeff();
-  if (d.domain == Domain::Discrete)
+  if (d.domain == Domain::Discrete && !b.tustin)
     return "the excited band omega = " + fmt(lo, 3) + " ... " + fmt(hi, 3) + " rad/sample covers " +
            fmt(100 * (hi - lo) / M_PI, 3) + " % of [0, pi], on which r = " + std::to_string(r) +
-           " powers of z are numerically dependent; use a lower --r, or --domain continuous (rad/s, a basis "
-           "scaled to the band) with the frequencies in rad/s";
+           " powers of z are numerically dependent; use a lower --r, or --method bilinear (a basis spread over the "
+           "band), or --domain continuous with the frequencies in rad/s";
+  if (d.domain == Domain::Discrete)
+    return "the excited band omega = " + fmt(lo, 3) + " ... " + fmt(hi, 3) + " rad/sample, on the Tustin axis tan(omega/2) " +
+           "a factor " + fmt(std::tan(hi / 2) / std::tan(std::max(lo, 1e-300) / 2), 3) + ", still makes r = " +
+           std::to_string(r) + " basis functions numerically dependent; use a lower --r" +
+           (b.orthogonal ? "" : ", or --method orthogonal");
   return "the band omega = " + fmt(lo, 3) + " ... " + fmt(hi, 3) + " rad/s spans a factor " + fmt(hi / lo, 3) +
          ", on which r = " + std::to_string(r) + " basis functions are numerically dependent; use a lower --r, or "
          "the other --method";
@@ -278,7 +314,7 @@ Eigen::MatrixXd step1ab_qr(const FrfData& d, const Bases& b, int r) {
     fail(ErrorKind::Numerical, "step 1b",
          "the input data matrix U^re is rank deficient (min |R11_ii| / max = " + fmt(r11.minCoeff() / r11max, 3) +
              "): the input does not excite r = " + std::to_string(r) +
-             " basis functions (Pintelon 2002 Assumption 3): " + band_advice(d, r) + ", or excite more lines");
+             " basis functions (Pintelon 2002 Assumption 3): " + band_advice(d, b, r) + ", or excite more lines");
   return R;
 }
 
@@ -329,14 +365,15 @@ Eigen::MatrixXd step1c_noise_covariance(const FrfData& d, const Bases& b, int r)
 // ‖L⁻¹‖; noise_scale = ‖L⁻¹‖₁ ‖R‖_F records it.
 // Fails: Error(Numerical) when C_Y is not positive definite.
 // References: Pintelon (2002) Algorithm 1 step 1c.
-Step1 step1c_whitened_svd(const Eigen::MatrixXd& CY, const Eigen::MatrixXd& R, int r, const FrfData& d) {
+Step1 step1c_whitened_svd(const Eigen::MatrixXd& CY, const Eigen::MatrixXd& R, int r, const FrfData& d,
+                          const Bases& b) {
   const Eigen::Index ny = CY.rows();
   const Eigen::MatrixXd R22t = R.bottomRightCorner(ny, ny).transpose();
   Step1 s;
   Eigen::LLT<Eigen::MatrixXd> llt(CY);
   if (llt.info() != Eigen::Success)
     fail(ErrorKind::Numerical, "step 1c",
-         "C_Y = sum of sigma^2 W W^H (Eq. 18) is not positive definite: " + band_advice(d, r) +
+         "C_Y = sum of sigma^2 W W^H (Eq. 18) is not positive definite: " + band_advice(d, b, r) +
              " (or the variances are zero or tiny: check the G_var column)");
   s.L = llt.matrixL();
   const Eigen::MatrixXd K = s.L.triangularView<Eigen::Lower>().solve(R22t);
@@ -354,7 +391,7 @@ Step1 step1(const FrfData& d, const Bases& b, int r) {
   const Eigen::MatrixXd R = step1ab_qr(d, b, r);
   const int nu = r * d.inputs();
   const double r11_cond = triangular_condition(R.topLeftCorner(nu, nu));
-  Step1 s = step1c_whitened_svd(step1c_noise_covariance(d, b, r), R, r, d);
+  Step1 s = step1c_whitened_svd(step1c_noise_covariance(d, b, r), R, r, d, b);
   s.r11_condition = r11_cond;
   return s;
 }
@@ -442,6 +479,21 @@ int check_order_r(const FrfData& d, int order, int r) {
 
 const char* to_string(ContinuousMethod m) {
   return m == ContinuousMethod::Bilinear ? "bilinear" : "orthogonal";
+}
+
+const char* to_string(DiscreteMethod m) {
+  return m == DiscreteMethod::Monomial ? "monomial" : m == DiscreteMethod::Bilinear ? "bilinear" : "orthogonal";
+}
+
+double default_discrete_scale(const Eigen::VectorXd& omega) {
+  double lo = M_PI, hi = 0;
+  for (Eigen::Index k = 0; k < omega.size(); ++k)
+    if (omega(k) > 0 && omega(k) < M_PI) {
+      lo = std::min(lo, omega(k));
+      hi = std::max(hi, omega(k));
+    }
+  if (!(hi > 0)) return M_PI / 2;
+  return 2 * std::atan(std::sqrt(std::tan(lo / 2) * std::tan(hi / 2)));
 }
 
 FrfData frf_data(Domain domain, const Eigen::VectorXd& omega, const std::vector<Eigen::MatrixXcd>& G,
@@ -571,11 +623,36 @@ StateSpace bilinear_to_continuous(const StateSpace& w, double omega_scale) {
   return c;
 }
 
-Eigen::VectorXd frf_singular_values(const FrfData& data, int r, ContinuousMethod continuous, double omega_scale) {
+StateSpace tustin_to_discrete(const StateSpace& s) {
+  StateSpace z;
+  try {
+    z = bilinear_to_continuous(s, 1.0);
+  } catch (const Error&) {
+    fail(ErrorKind::Numerical, "Tustin back-transformation",
+         "I - A' is singular: the estimate has a pole at z = infinity; try another omega_scale or --method monomial");
+  }
+  z.domain = Domain::Discrete;
+  z.sample_time = 1.0;
+  return z;
+}
+
+StateSpace bilinear_to_discrete(const StateSpace& w, double omega_scale) {
+  StateSpace s;
+  try {
+    s = bilinear_to_continuous(w, std::tan(omega_scale / 2));
+  } catch (const Error&) {
+    fail(ErrorKind::Numerical, "bilinear back-transformation",
+         "I - A_w is singular: the estimate has a pole at w = 1 (z = -1); try another omega_scale or --method monomial");
+  }
+  return tustin_to_discrete(s);
+}
+
+Eigen::VectorXd frf_singular_values(const FrfData& data, int r, ContinuousMethod continuous, double omega_scale,
+                                    DiscreteMethod discrete) {
   validate(data);
   if (r < 2) fail(ErrorKind::Dimension, "r", "r must be at least 2, got " + std::to_string(r));
   check_r_size(data, r);
-  const Bases b = make_bases(data, r, continuous, omega_scale);
+  const Bases b = make_bases(data, r, continuous, omega_scale, discrete);
   return step1(data, b, r).sigma;
 }
 
@@ -602,12 +679,13 @@ std::string instability_warning(Domain domain, const Eigen::VectorXcd& poles) {
          "; it fits the data's frequency response but must not be simulated: try another --order or --r";
 }
 
-FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMethod continuous, double omega_scale) {
+FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMethod continuous, double omega_scale,
+                             DiscreteMethod discrete) {
   validate(d);
   check_order_r(d, order, r);
   check_r_size(d, r);
   const int p = d.outputs(), n = order;
-  const Bases b = make_bases(d, r, continuous, omega_scale);
+  const Bases b = make_bases(d, r, continuous, omega_scale, discrete);
   const Step1 s1 = step1(d, b, r);
   if (!(s1.sigma(n - 1) > 0))
     fail(ErrorKind::Order, "step 1c", "singular value " + std::to_string(n) + " is zero: the data hold no order-" +
@@ -655,9 +733,19 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
     } else {
       est = bilinear_to_continuous(est, b.omega_scale);
     }
+  } else if (b.tustin) {
+    if (b.orthogonal) {  // s̃ = s'/t_s → s', then z
+      const double ts = std::tan(b.omega_scale / 2);
+      est.A *= ts;
+      est.B *= ts;
+      est = tustin_to_discrete(est);
+    } else {
+      est = bilinear_to_discrete(est, b.omega_scale);
+    }
+    est.sample_time = d.sample_time;
   }
   res.model = est;
-  if (d.domain == Domain::Continuous) res.omega_scale = b.omega_scale;
+  if (d.domain == Domain::Continuous || b.tustin) res.omega_scale = b.omega_scale;
   res.order = n;
   res.r = r;
   res.order_r = r;
@@ -710,7 +798,7 @@ AutomaticOrder automatic_order(const FrfData& d, const FrfOptions& o, int r_feas
   if (a.order_r < 2)
     fail(ErrorKind::Dimension, "order", "too few frequencies (" + std::to_string(F) + ") to read an order");
   const int n_max = o.max_order > 0 ? std::min(o.max_order, a.order_r * p - 1) : std::min(20, a.order_r * p - 1);
-  const Eigen::VectorXd& sv = a.sigma = frf_singular_values(d, a.order_r, o.continuous, o.omega_scale);
+  const Eigen::VectorXd& sv = a.sigma = frf_singular_values(d, a.order_r, o.continuous, o.omega_scale, o.discrete);
   if (d.has_noise_model) {
     // Whitened noise (C_Y = E[𝐍^re 𝐍^reᵀ]) has squared singular values
     // spread over the Marchenko–Pastur law of ratio γ = r p / (F c) (F c
@@ -760,7 +848,7 @@ FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
   const int order = o.order > 0 ? o.order : automatic.order;
   FrfResult best;
   if (o.r > 0) {
-    best = identify_frf_fixed(d, order, o.r, o.continuous, o.omega_scale);
+    best = identify_frf_fixed(d, order, o.r, o.continuous, o.omega_scale, o.discrete);
   } else {
     // Section 5: r minimising V_SUB (Eq. 35) over [1.5 n_a, 6 n_a], a craggy
     // function of r, so every r is tried.
@@ -774,7 +862,7 @@ FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
     std::vector<std::pair<int, double>> scan;
     for (int r = r_lo; r <= r_hi; ++r) {
       try {
-        FrfResult res = identify_frf_fixed(d, order, r, o.continuous, o.omega_scale);
+        FrfResult res = identify_frf_fixed(d, order, r, o.continuous, o.omega_scale, o.discrete);
         scan.emplace_back(r, res.v_sub);
         if (!found || res.v_sub < best.v_sub) {
           best = std::move(res);

@@ -243,7 +243,7 @@ json to_json(const FrfOracleCheck& k) {
                              "first-order sensitivity for the candidate's own rounding (fdsid/compare.hpp)"}}},
             {"reference_model", k.reference_model}};
   if (!k.meta_path.empty()) j["meta"] = k.meta_path;
-  if (k.domain == Domain::Continuous) j["omega_scale"] = k.omega_scale;
+  if (k.domain == Domain::Continuous || k.omega_scale > 0) j["omega_scale"] = k.omega_scale;
   return j;
 }
 

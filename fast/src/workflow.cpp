@@ -53,9 +53,36 @@ OrderAndR select_order_and_r(const FrfData& data, const FrfOptions& options) {
   return {sel.order, sel.r};
 }
 
-std::string frf_method_name(Domain domain, ContinuousMethod method) {
-  return domain == Domain::Discrete ? std::string("pintelon2002-alg1")
-                                    : std::string("pintelon2002-alg2-") + to_string(method);
+std::string frf_method_name(Domain domain, ContinuousMethod method, DiscreteMethod discrete) {
+  if (domain == Domain::Discrete)
+    return discrete == DiscreteMethod::Monomial ? std::string("pintelon2002-alg1")
+                                                : std::string("pintelon2002-alg1-") + to_string(discrete);
+  return std::string("pintelon2002-alg2-") + to_string(method);
+}
+
+void set_frf_method(const std::string& name, Domain domain, FrfOptions& options) {
+  if (domain == Domain::Discrete) {
+    if (name.empty() || name == "monomial")
+      options.discrete = DiscreteMethod::Monomial;
+    else if (name == "bilinear")
+      options.discrete = DiscreteMethod::Bilinear;
+    else if (name == "orthogonal")
+      options.discrete = DiscreteMethod::Orthogonal;
+    else
+      throw Error(ErrorKind::Input, "--method",
+                  "\"" + name + "\" is not monomial, bilinear or orthogonal (discrete time)");
+    return;
+  }
+  if (name.empty() || name == "bilinear")
+    options.continuous = ContinuousMethod::Bilinear;
+  else if (name == "orthogonal")
+    options.continuous = ContinuousMethod::Orthogonal;
+  else if (name == "monomial")
+    throw Error(ErrorKind::Input, "--method",
+                "monomial (Algorithm 1) is a discrete-time method; continuous time: bilinear or orthogonal, or give --domain "
+                "discrete with the frequencies in rad/sample");
+  else
+    throw Error(ErrorKind::Input, "--method", "\"" + name + "\" is not bilinear or orthogonal (continuous time)");
 }
 
 void require_spectrum_model(const StateSpace& model, const std::string& where) {

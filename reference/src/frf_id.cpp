@@ -144,6 +144,15 @@ void check_options(const FrfData& data, const Shape& s, const FrfOptions& option
   if (data.domain == "continuous" && method != "bilinear" && method != "orthogonal")
     throw InputError("options: continuous_method \"" + method +
                      "\" is neither \"bilinear\" nor \"orthogonal\"");
+  const std::string& dm = options.discrete_method;
+  if (data.domain == "discrete" && dm != "monomial" && dm != "bilinear" && dm != "orthogonal")
+    throw InputError("options: discrete_method \"" + dm + "\" is not \"monomial\", \"bilinear\" or \"orthogonal\"");
+  const Real pi = boost::math::constants::pi<Real>();
+  if (data.domain == "discrete" && dm != "monomial" && options.omega_scale >= pi)
+    throw InputError("options: omega_scale = " + fmt(options.omega_scale) + " rad/sample must be < pi");
+  if (data.domain == "discrete" && dm == "orthogonal")
+    for (const Real& w : data.omega)
+      if (!(w < pi)) throw InputError("data: omega = pi maps to tan(omega/2) = infinity (discrete_method orthogonal)");
   if (!finite(options.omega_scale) || options.omega_scale < 0)
     throw InputError("options: omega_scale = " + fmt(options.omega_scale) +
                      " must be >= 0 (0 = automatic)");
@@ -521,6 +530,38 @@ Estimate algorithm2_1_bilinear(const FrfData& data, const Shape& s, const Real& 
   return Estimate{cont.A, cont.B, cont.C, cont.D, w.singular_values};
 }
 
+// Algorithm 2.1 for discrete data (FrfOptions::discrete_method "bilinear"):
+// the Tustin map s' = (z − 1)/(z + 1) takes z = e^{jω} to s' = j tan(ω/2) and
+// a rational G_d(z) to G'(s') = G_d((1 + s')/(1 − s')) of the same order, so
+// Algorithm 2.1 runs on the frequencies tan(ω/2) with the scale
+// t_s = tan(ω_scale/2): ξ = w = (s'/t_s − 1)/(s'/t_s + 1), written as
+// (j sin(ω/2) − t_s cos(ω/2))/(j sin(ω/2) + t_s cos(ω/2)) so that ω = π gives 1.
+// Back: w → s' (bilinear_to_continuous, scale t_s), then s' → z: with
+// s' = (z − 1)/(z + 1), s'I − A' = (I − A')(zI − A_z)/(z + 1) where
+// A_z = (I − A')⁻¹(I + A') — the formulas of bilinear_to_continuous with
+// scale 1 (z plays the part of s, s' that of w).
+// Fails: as Algorithm 1, StepError(4) when I − A_w or I − A' is singular.
+Estimate algorithm2_1_tustin(const FrfData& data, const Shape& s, const Real& scale, int n, int r,
+                             const Perturbation& pert) {
+  const Real ts = tan(scale / 2);
+  std::vector<Complex> xi(s.F);
+  for (int k = 0; k < s.F; ++k) {
+    const Complex st(Real(0), sin(data.omega[k] / 2));
+    const Real ct = ts * cos(data.omega[k] / 2);
+    xi[k] = (st - ct) / (st + ct);
+  }
+  const MatrixC W = monomial_rows(xi, r);
+  const Estimate w = algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r, pert);
+  Model w_model;
+  w_model.A = w.A;
+  w_model.B = w.B;
+  w_model.C = w.C;
+  w_model.D = w.D;
+  const Model tustin = bilinear_to_continuous(w_model, ts);
+  const Model z = bilinear_to_continuous(tustin, Real(1));
+  return Estimate{z.A, z.B, z.C, z.D, w.singular_values};
+}
+
 // Algorithm 2.2: Algorithm 1 with ξ = s̃ = jω/ω_scale and the monomial rows
 // replaced by the orthonormal bases of the inputs (weights ‖U[k]‖²_F) and of
 // the outputs (‖Y[k]‖²_F); A, B are rescaled from s̃ to s.
@@ -543,6 +584,23 @@ Estimate algorithm2_2_orthogonal(const FrfData& data, const Shape& s, const Real
   return est;
 }
 
+// Algorithm 2.2 for discrete data (discrete_method "orthogonal"): the same
+// Tustin map, Algorithm 2.2 on the frequencies tan(ω/2) with the scale
+// t_s = tan(ω_scale/2) (its result is in s'), then s' → z as above.
+Estimate algorithm2_2_tustin(const FrfData& data, const Shape& s, const Real& scale, int n, int r,
+                             const Perturbation& pert) {
+  FrfData tan_axis = data;
+  for (Real& w : tan_axis.omega) w = tan(w / 2);
+  const Estimate sp = algorithm2_2_orthogonal(tan_axis, s, tan(scale / 2), n, r, pert);
+  Model sp_model;
+  sp_model.A = sp.A;
+  sp_model.B = sp.B;
+  sp_model.C = sp.C;
+  sp_model.D = sp.D;
+  const Model z = bilinear_to_continuous(sp_model, Real(1));
+  return Estimate{z.A, z.B, z.C, z.D, sp.singular_values};
+}
+
 }  // namespace
 
 FrfResult identify_frf(const FrfData& data, const FrfOptions& options) {
@@ -556,9 +614,25 @@ FrfResult identify_frf(const FrfData& data, const FrfOptions& options) {
     scale = sqrt(*lo * *hi);
   }
 
+  const bool tustin = !continuous && options.discrete_method != "monomial";
+  if (tustin && scale == 0) {  // automatic: the geometric mean of tan(ω/2) at the band edges inside (0, π)
+    const Real pi = boost::math::constants::pi<Real>();
+    Real lo = pi, hi = 0;
+    for (const Real& w : data.omega)
+      if (w > 0 && w < pi) {
+        if (w < lo) lo = w;
+        if (w > hi) hi = w;
+      }
+    scale = hi > 0 ? Real(2 * atan(sqrt(tan(lo / 2) * tan(hi / 2)))) : Real(pi / 2);
+  }
+
   const Perturbation pert{options.backward_perturbation, options.perturbation_seed};
   Estimate est;
-  if (!continuous)
+  if (tustin && options.discrete_method == "bilinear")
+    est = algorithm2_1_tustin(data, s, scale, n, r, pert);
+  else if (tustin)
+    est = algorithm2_2_tustin(data, s, scale, n, r, pert);
+  else if (!continuous)
     est = algorithm1_discrete(data, s, n, r, pert);
   else if (options.continuous_method == "bilinear")
     est = algorithm2_1_bilinear(data, s, scale, n, r, pert);

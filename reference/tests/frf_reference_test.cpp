@@ -236,6 +236,61 @@ TEST(FrfReference, ContinuousBilinearNoiseFreeIsExact) {
   check_exact("continuous bilinear", truth, data, options, true, Real(100), Real("1e-27"));
 }
 
+// Lightly damped modes at the angles `theta` (rad/sample, decimal strings),
+// pole radius `rho`, real modal form, D = 1/10.
+Model modes_at(const std::vector<const char*>& theta, const char* rho) {
+  const Eigen::Index n = 2 * static_cast<Eigen::Index>(theta.size());
+  Model model;
+  model.A = MatrixR::Zero(n, n);
+  model.B = MatrixR::Zero(n, 1);
+  model.C = MatrixR::Zero(1, n);
+  for (std::size_t i = 0; i < theta.size(); ++i) {
+    const Real t(theta[i]), r(rho);
+    const Eigen::Index j = 2 * static_cast<Eigen::Index>(i);
+    model.A(j, j) = model.A(j + 1, j + 1) = r * cos(t);
+    model.A(j, j + 1) = r * sin(t);
+    model.A(j + 1, j) = -r * sin(t);
+    model.B(j, 0) = Real(3) / 10;
+    model.B(j + 1, 0) = Real(static_cast<int>(i) + 1) / 10;
+    model.C(0, j) = Real(2) / 10;
+    model.C(0, j + 1) = -Real(static_cast<int>(i) + 1) / 20;
+  }
+  model.D = MatrixR::Constant(1, 1, Real(1) / 10);
+  return model;
+}
+
+// F lines spread irregularly over [lo, hi] rad/sample.
+std::vector<Real> band(int F, const Real& lo, const Real& hi) {
+  std::vector<Real> omega;
+  for (int k = 0; k < F; ++k)
+    omega.push_back(lo + (hi - lo) * (k + Real("0.3") * sin(Real(k * k)) / 2 + Real("0.2")) / F);
+  return omega;
+}
+
+// Discrete, noise-free, narrow bands (issue 15, item 4), with the modes inside.
+// (a) The F-16 record's band (2-15 Hz at 400 Hz: 6.5 % of [0, π], tan ratio
+// 7.5), three modes, discrete_method "bilinear"; (b) [0.3, 0.5] rad/sample
+// (tan ratio 1.7), two modes, discrete_method "orthogonal". Both bases keep
+// the rows apart on these bands: σ_1/σ_n ≤ 10 (checked), so, as for the
+// spread discrete grid above, (σ_1/σ_n)² ≤ 1e2, LS steps ≤ 1e4, c = 1e6, and
+// the back-transforms (I − A_w)⁻¹ and (I − A')⁻¹ (poles near z = 1 map to
+// s' ≈ 0 and w ≈ −1, far from the singular points) ≤ 1e3 each: ≤ 1e18 u ≈
+// 1e-32; tol 1e-28 (measured ~1e-49).
+TEST(FrfReference, DiscreteNarrowBandTustinBasesNoiseFreeAreExact) {
+  const Real pi400 = pi / 200;  // 2π/400: 1 Hz at 400 Hz in rad/sample
+  const Model wide = modes_at({"0.06", "0.12", "0.2"}, "0.99");
+  FrfOptions bilinear = options_for(6, 14);
+  bilinear.discrete_method = "bilinear";
+  check_exact("discrete narrow-band bilinear", wide, make_data(wide, band(60, 2 * pi400, 15 * pi400), true), bilinear,
+              false, Real(10), Real("1e-28"));
+  const Model narrow = modes_at({"0.35", "0.45"}, "0.98");
+  FrfOptions orthogonal = options_for(4, 10);
+  orthogonal.discrete_method = "orthogonal";
+  check_exact("discrete narrow-ratio orthogonal", narrow,
+              make_data(narrow, band(60, Real("0.3"), Real("0.5")), true), orthogonal, false, Real(10),
+              Real("1e-28"));
+}
+
 // Orthogonal polynomial rows in s̃ = s/ω_scale ∈ j[0.0032, 316]. The basis is
 // built by Gram–Schmidt in Arnoldi form (values at the nodes, stable), and
 // σ_1/σ_n ≤ 1e5 (checked; the rows are orthonormal but the state-space

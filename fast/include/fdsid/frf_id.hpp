@@ -55,6 +55,33 @@ enum class ContinuousMethod {
 };
 const char* to_string(ContinuousMethod m);
 
+/// The bases for discrete-time data (issue 15, item 4): Algorithm 1's, and
+/// Algorithm 2's two on the Tustin frequencies.
+enum class DiscreteMethod {
+  Monomial,  ///< Algorithm 1 as printed: ξ = z = e^{jω}, rows z^0 … z^{r−1} (Eq. 7)
+  /// Algorithm 2.1 on the Tustin frequencies: z = e^{jω} is mapped to
+  /// s' = (z − 1)/(z + 1) = j tan(ω/2) (exact for rational G: G_d(z) =
+  /// G'(s'), same order), then to w = (s'/t_s − 1)/(s'/t_s + 1) with
+  /// t_s = tan(ω_s/2), and Algorithm 1 runs in w; the w-model goes back to s'
+  /// (bilinear_to_continuous, scale t_s) and to z (the same map with scale 1,
+  /// domain discrete: bilinear_to_discrete). The composite z ↦ w is a Möbius
+  /// map of the unit circle onto itself that spreads the arc [ω_min, ω_max]
+  /// over the circle as Algorithm 2.1 spreads a continuous band: the discrete
+  /// counterpart of the frequency scaling, for narrow-band data on which the
+  /// powers of z are numerically dependent (a band of 6.5 % of [0, π] with r =
+  /// 24: min |R11_ii| / max = 8e-14). Real-coefficient Möbius maps of the
+  /// circle are exactly these scalings of s', so the arc in w is fixed by the
+  /// band's ratio tan(ω_max/2)/tan(ω_min/2): 1.7 rad for the F-16's 7.5, but
+  /// only 0.5 rad for a ratio of 1.7 (then use Orthogonal).
+  Bilinear,
+  /// Algorithm 2.2 on the Tustin frequencies: orthonormal polynomial bases in
+  /// s̃ = j tan(ω/2)/t_s (Forsythe/Arnoldi, weighted by the data as in 2.2),
+  /// conditioned on a band of any width or ratio; the s̃-model is scaled to s'
+  /// and mapped to z by tustin_to_discrete. ω = π (s' = ∞) is refused.
+  Orthogonal
+};
+const char* to_string(DiscreteMethod m);
+
 struct FrfOptions {
   int order = 0;  ///< n_a; 0 reads it from the singular values of step 1c
   int r = 0;      ///< r > n_a; 0 chooses it by minimising V_SUB (Eq. 35) over [r_min, r_max]
@@ -62,7 +89,8 @@ struct FrfOptions {
   int r_max = 0;  ///< 0: max(r_min, 6 n_a)         (Section 5; larger when asked)
   int max_order = 0;  ///< largest order the automatic selection considers; 0: min(20, r p − 1)
   ContinuousMethod continuous = ContinuousMethod::Bilinear;
-  double omega_scale = 0;  ///< ω_s of Algorithm 2; 0: √(ω_min ω_max)
+  double omega_scale = 0;  ///< ω_s of Algorithm 2; 0: √(ω_min ω_max) (discrete bilinear: default_discrete_scale)
+  DiscreteMethod discrete = DiscreteMethod::Monomial;
 };
 
 struct FrfResult {
@@ -79,7 +107,8 @@ struct FrfResult {
   Eigen::VectorXcd poles;
   /// The automatic order stopped at the top of its search range (a warning says so).
   bool order_at_search_cap = false;
-  /// ω_s of Algorithm 2 that was used (continuous time; 0 in discrete time).
+  /// ω_s of Algorithm 2 that was used (continuous time, rad/s; discrete time
+  /// with DiscreteMethod::Bilinear, rad/sample; 0 with the monomial basis).
   double omega_scale = 0;
   /// κ = max((max(σ_1, ‖L⁻¹‖‖R‖)/σ_n of step 1c) · cond(Ô_r[1:r−1]) of step 2 ·
   /// cond(R11) of step 1b, cond of step 3's least squares): the first-order
@@ -118,8 +147,11 @@ struct FrfResult {
 /// exciting, Assumption 3) or I − A_w is singular in the back-transformation.
 /// References: Pintelon, Automatica 38 (2002) 1295–1311; McKelvey, Akçay &
 /// Ljung, IEEE TAC 41 (1996); Verhaegen (1994); Yang & Sanada (2000).
+/// Discrete data with DiscreteMethod::Bilinear: see there; omega_scale is then
+/// ω_s in rad/sample, 0 < ω_s < π.
 FrfResult identify_frf_fixed(const FrfData& data, int order, int r,
-                             ContinuousMethod continuous = ContinuousMethod::Bilinear, double omega_scale = 0);
+                             ContinuousMethod continuous = ContinuousMethod::Bilinear, double omega_scale = 0,
+                             DiscreteMethod discrete = DiscreteMethod::Monomial);
 
 /// Identification with the choices of Section 5: the order from the singular
 /// values of step 1c (when options.order == 0) and r minimising V_SUB (Eq. 35)
@@ -133,7 +165,14 @@ FrfResult identify_frf(const FrfData& data, const FrfOptions& options = {});
 /// Step 1 only: the singular values of C_Y^{-1/2} R22ᵀ for a given r.
 Eigen::VectorXd frf_singular_values(const FrfData& data, int r,
                                     ContinuousMethod continuous = ContinuousMethod::Bilinear,
-                                    double omega_scale = 0);
+                                    double omega_scale = 0, DiscreteMethod discrete = DiscreteMethod::Monomial);
+
+/// The default ω_s (rad/sample) of DiscreteMethod::Bilinear: 2 atan √(t_lo t_hi)
+/// with t = tan(ω/2) at the lowest and highest frequency strictly inside
+/// (0, π) — the discrete counterpart of Algorithm 2's √(ω_min ω_max): the
+/// band's edges land symmetrically about w = −j. π/2 (t_s = 1, the plain
+/// Tustin map) when no frequency lies inside (0, π).
+double default_discrete_scale(const Eigen::VectorXd& omega);
 
 /// Step 3 alone (Eq. 17 with W = 1/σ): B and D for given A and C, with
 /// ξ = e^{jω} (discrete) or ξ = jω (continuous; A in rad/s). Used for the
@@ -164,6 +203,20 @@ double v_sub(const StateSpace& model, const FrfData& data);
 /// (s̃ + 1)(s̃I − A_c)⁻¹ = I + (I + A_c)(s̃I − A_c)⁻¹ with I + A_c = 2(I − A_w)⁻¹.
 /// Throws Error(Numerical) when I − A_w is singular (a pole at s = ∞).
 StateSpace bilinear_to_continuous(const StateSpace& w_model, double omega_scale);
+
+/// The inverse Tustin map: (A', B', C', D') in s' to (A, B, C, D) in z, where
+/// s' = (z − 1)/(z + 1), i.e. z = (1 + s')/(1 − s'): the formulas of
+/// bilinear_to_continuous with scale 1 (s'I − A' = (I − A')(zI − A_z)/(z + 1),
+/// A_z = (I − A')⁻¹(I + A'), and so on as there); domain discrete, sample_time
+/// 1 (the caller sets it). Throws Error(Numerical) when I − A' is singular (a
+/// pole at z = ∞).
+StateSpace tustin_to_discrete(const StateSpace& s_model);
+
+/// DiscreteMethod::Bilinear's back-transformation: (A_w, B_w, C_w, D_w) in w to
+/// (A, B, C, D) in z = e^{jω}: s' = t_s (1 + w)/(1 − w) (bilinear_to_continuous
+/// with scale t_s = tan(ω_s/2)), then tustin_to_discrete. Throws
+/// Error(Numerical) when I − A_w is singular (a pole at z = −1) or I − A' is.
+StateSpace bilinear_to_discrete(const StateSpace& w_model, double omega_scale);
 
 // ---------------------------------------------------------------------------
 // Periodic records and sample statistics (Section 4.1, Section 5)

@@ -121,8 +121,17 @@ OrderAndR select_order_and_r(const FrfData& data, const FrfOptions& options);
 
 /// The "method" name of an FRF identification: "pintelon2002-alg1" (discrete
 /// time, Algorithm 1) or "pintelon2002-alg2-bilinear" / "-orthogonal"
-/// (continuous time, Algorithm 2.1 / 2.2).
-std::string frf_method_name(Domain domain, ContinuousMethod method);
+/// (continuous time, Algorithm 2.1 / 2.2), "pintelon2002-alg1-bilinear" /
+/// "-orthogonal" (discrete time, DiscreteMethod::Bilinear / Orthogonal).
+std::string frf_method_name(Domain domain, ContinuousMethod method, DiscreteMethod discrete = DiscreteMethod::Monomial);
+
+/// --method of identify-frf and check: the basis of the data's domain —
+/// continuous time "bilinear" (Algorithm 2.1, the default) or "orthogonal"
+/// (2.2); discrete time "monomial" (Algorithm 1, the default), "bilinear" or
+/// "orthogonal" (DiscreteMethod). Empty: the domain's default. Sets
+/// options.continuous / options.discrete; throws Error(Input) on "--method"
+/// for a name of the other domain or an unknown one.
+void set_frf_method(const std::string& name, Domain domain, FrfOptions& options);
 
 // ---------------------------------------------------------------------------
 // Power spectra of models

@@ -33,6 +33,14 @@ struct FrfOptions {
   int r = 0;                                   ///< r > n_a (required)
   std::string continuous_method = "bilinear";  ///< "bilinear" (Alg. 2.1) or "orthogonal" (Alg. 2.2); ignored for discrete
   Real omega_scale = 0;                        ///< ω_scale; 0 = sqrt(ω_min ω_max)
+  /// Discrete data: "monomial" (Algorithm 1, ξ = z), "bilinear" (Algorithm
+  /// 2.1 on the Tustin frequencies: s' = (z − 1)/(z + 1) = j tan(ω/2), then
+  /// w = (s'/t_s − 1)/(s'/t_s + 1) with t_s = tan(ω_scale/2), ω_scale in
+  /// rad/sample; 0 = 2 atan √(tan(ω_lo/2) tan(ω_hi/2)) over the frequencies in
+  /// (0, π), π/2 when there are none) or "orthogonal" (Algorithm 2.2 on the
+  /// frequencies tan(ω/2) with the scale t_s; ω = π refused). Ignored for
+  /// continuous data.
+  std::string discrete_method = "monomial";
   /// Verification only (what `fdsid check` uses to measure how far rounding
   /// moves the result): > 0 moves each row of Z = [𝐔^re; 𝐘^re] of step 1a
   /// (a column of the Zᵀ that step 1b factors) by backward_perturbation times
