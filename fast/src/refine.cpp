@@ -11,6 +11,7 @@
 #include <boost/math/distributions/chi_squared.hpp>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "fdsid/error.hpp"
 #include "fdsid/format.hpp"
@@ -322,6 +323,85 @@ class MlCost final : public ceres::CostFunction {
   const Layout& l_;
 };
 
+/// The errors-in-variables residuals (RefineOptions): per line k, Re and Im of
+/// (Ŷ_k − G Û_k)/√v_k with v_k = σ²_Y + |G|²σ²_U − 2 Re(σ_YU conj G). G and
+/// ∂G/∂θ from Layout::evaluate on unit data (U = 1, Y = 0, σ = 1: residuals
+/// −G, Jacobian −∂G/∂θ); with e = Ŷ − G Û,
+///   ∂r = −∂G Û/√v − e ∂v/(2 v^{3/2}),  ∂v = 2 Re(∂G (conj(G) σ²_U − conj(σ_YU))).
+/// `information`: the first term only, −∂G Û/√v — the Jacobian whose JᵀJ is
+/// the Fisher information of the EIV problem to first order (the true inputs
+/// eliminated as nuisance parameters: Pintelon & Schoukens 2012, Ch. 10). The
+/// second term is zero-mean but its square is not (E|e|² = v gives
+/// ∂v_t ∂v_s/(4v²)), so the full J would overstate the information.
+class EivCost final : public ceres::CostFunction {
+ public:
+  EivCost(const FrfData& d, const Layout& l, const RefineOptions& o, bool information = false)
+      : d_(d), l_(l), su_(o.input_variance), syu_(o.input_output_covariance), information_(information) {
+    unit_ = frf_data(d.domain, d.omega, std::vector<Eigen::MatrixXcd>(d.frequencies(), Eigen::MatrixXcd::Zero(1, 1)));
+    set_num_residuals(2 * d.frequencies());
+    mutable_parameter_block_sizes()->push_back(l.count);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const int F = d_.frequencies(), q = l_.count;
+    double* J = jacobians ? jacobians[0] : nullptr;
+    g_.resize(2 * F);
+    if (J) jg_.resize(static_cast<size_t>(2 * F) * q);
+    if (!l_.evaluate(unit_, parameters[0], g_.data(), J ? jg_.data() : nullptr)) return false;
+    for (int k = 0; k < F; ++k) {
+      const cplx G = -cplx(g_[2 * k], g_[2 * k + 1]), U = d_.U[k](0, 0);
+      const cplx e = d_.Y[k](0, 0) - G * U;
+      const double v = d_.variance[k](0, 0) + std::norm(G) * su_(k) - 2 * (syu_(k) * std::conj(G)).real();
+      if (!(v > 0) || !std::isfinite(v)) return false;
+      const double sq = std::sqrt(v);
+      residuals[2 * k] = e.real() / sq;
+      residuals[2 * k + 1] = e.imag() / sq;
+      if (!J) continue;
+      const cplx gstar = std::conj(G) * su_(k) - std::conj(syu_(k));
+      for (int t = 0; t < q; ++t) {
+        const size_t r = 2 * static_cast<size_t>(k);
+        const cplx dG = -cplx(jg_[r * q + t], jg_[(r + 1) * q + t]);
+        const double dv = information_ ? 0.0 : 2 * (dG * gstar).real();
+        const cplx dr = -dG * U / sq - e * dv / (2 * v * sq);
+        J[r * q + t] = dr.real();
+        J[(r + 1) * q + t] = dr.imag();
+      }
+    }
+    return true;
+  }
+
+ private:
+  const FrfData& d_;
+  const Layout& l_;
+  const Eigen::VectorXd& su_;
+  const Eigen::VectorXcd& syu_;
+  bool information_;
+  FrfData unit_;
+  mutable std::vector<double> g_, jg_;
+};
+
+/// The Jacobian of a cost function's residuals at θ (residuals × parameters).
+Eigen::MatrixXd cost_jacobian(const ceres::CostFunction& cost, const Eigen::VectorXd& th) {
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> J(cost.num_residuals(), th.size());
+  Eigen::VectorXd r(cost.num_residuals());
+  const double* params[] = {th.data()};
+  double* jac[] = {J.data()};
+  if (!cost.Evaluate(params, r.data(), jac)) fail(ErrorKind::Numerical, "the cost cannot be evaluated at the refined model");
+  return J;
+}
+
+bool has_input_noise(const RefineOptions& o) { return o.input_variance.size() > 0; }
+
+void check_input_noise(const FrfData& d, const RefineOptions& o) {
+  if (!has_input_noise(o)) return;
+  if (d.inputs() != 1 || d.outputs() != 1 || d.columns() != 1)
+    fail(ErrorKind::Input, "the errors-in-variables refinement is SISO (one input, one output, one column per line)");
+  const Eigen::Index F = d.frequencies();
+  if (o.input_variance.size() != F || o.input_output_covariance.size() != F)
+    fail(ErrorKind::Input, "the input noise needs one variance and one covariance per line (" + std::to_string(F) + ")");
+  if (!o.input_variance.allFinite() || !(o.input_variance.array() >= 0).all() || !o.input_output_covariance.allFinite())
+    fail(ErrorKind::Input, "the input noise variances must be finite and >= 0");
+}
+
 void check_shapes(const FrfData& d, const StateSpace& start) {
   validate(d);
   validate(start, "starting model");
@@ -429,24 +509,55 @@ StateSpace reflect_unstable_poles(const FrfData& data, const StateSpace& model, 
   return out;
 }
 
+void eiv_input_noise(const SampleStatistics& stats, RefineOptions& options) {
+  const int F = stats.data.frequencies();
+  if (stats.data.inputs() != 1 || stats.data.outputs() != 1 || stats.M < 2)
+    fail(ErrorKind::Input, "errors-in-variables noise: SISO sample statistics over M >= 2 periods");
+  options.input_variance.resize(F);
+  options.input_output_covariance.resize(F);
+  for (int k = 0; k < F; ++k) {
+    options.input_variance(k) = stats.var_U[k](0) / stats.M;
+    options.input_output_covariance(k) = stats.cov_YU[k](0, 0) / double(stats.M);
+  }
+}
+
+double refine_cost(const FrfData& data, const StateSpace& model, const RefineOptions& opt) {
+  if (!has_input_noise(opt)) return v_sub(model, data);
+  check_input_noise(data, opt);
+  const std::vector<Eigen::MatrixXcd> G = frequency_response(model, data.omega);
+  double v = 0;
+  for (int k = 0; k < data.frequencies(); ++k) {
+    const cplx g = G[k](0, 0);
+    v += std::norm(data.Y[k](0, 0) - g * data.U[k](0, 0)) /
+         (data.variance[k](0, 0) + std::norm(g) * opt.input_variance(k) -
+          2 * (opt.input_output_covariance(k) * std::conj(g)).real());
+  }
+  return v;
+}
+
 RefineResult refine_ml(const FrfData& data, const StateSpace& given, const RefineOptions& opt) {
   check_shapes(data, given);
+  check_input_noise(data, opt);
   if (opt.noise == RefineNoise::Sample && opt.periods < 4)
     fail(ErrorKind::Input, "the sample ML estimator needs M >= 4 periods (the variance of its cost is finite from M = 4)");
   RefineResult res;
-  res.cost_subspace = v_sub(given, data);
+  res.cost_subspace = refine_cost(data, given, opt);
   res.start = opt.allow_unstable ? given : reflect_unstable_poles(data, given, &res.reflected);
-  res.cost_start = v_sub(res.start, data);
+  res.cost_start = refine_cost(data, res.start, opt);
   const Modal md = modal_form(res.start);
   const Layout lay(md, omega_scale(data));
   Eigen::VectorXd th = lay.pack(md.model);
 
-  MlCost cost(data, lay);
-  const ceres::Solver::Summary summary = minimise(cost, lay, th, !opt.allow_unstable, opt.max_iterations);
+  std::unique_ptr<ceres::CostFunction> cost;
+  if (has_input_noise(opt))
+    cost = std::make_unique<EivCost>(data, lay, opt);
+  else
+    cost = std::make_unique<MlCost>(data, lay);
+  const ceres::Solver::Summary summary = minimise(*cost, lay, th, !opt.allow_unstable, opt.max_iterations);
   res.iterations = static_cast<int>(summary.iterations.size()) - 1;
   res.termination = termination_text(summary);
   res.model = lay.unpack(th.data(), res.start);
-  res.cost = v_sub(res.model, data);
+  res.cost = refine_cost(data, res.model, opt);
 
   // Goodness of fit (refine.hpp).
   res.terms = data.frequencies() * data.outputs() * data.columns();
@@ -464,9 +575,10 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
     res.p_is_bound = true;
   }
 
-  // Cramér–Rao bound: Cov = ½ (JᵀJ)⁺ on the rank q = count − gauge.
-  Eigen::VectorXd r;
-  const Eigen::MatrixXd J = jacobian(data, lay, th, r);
+  // Cramér–Rao bound: Cov = ½ (JᵀJ)⁺ on the rank q = count − gauge (errors-in-
+  // variables: J without the ∂v/∂θ term, EivCost's `information`).
+  const Eigen::MatrixXd J =
+      has_input_noise(opt) ? cost_jacobian(EivCost(data, lay, opt, /*information=*/true), th) : cost_jacobian(*cost, th);
   const Eigen::BDCSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinV);
   const Eigen::VectorXd sv = svd.singularValues();
   const int q = res.free_parameters;

@@ -758,6 +758,47 @@ CostGradient cost_gradient(const Model& model, const FrfData& data) {
   return g;
 }
 
+CostGradient eiv_cost_gradient(const Model& model, const FrfData& data, const std::vector<Real>& var_U,
+                               const std::vector<Complex>& cov_YU) {
+  const Shape s = check_data(data);
+  if (s.m != 1 || s.p != 1 || s.c != 1) throw InputError("eiv_cost_gradient: the data must be SISO with one column");
+  if (var_U.size() != data.omega.size() || cov_YU.size() != data.omega.size())
+    throw InputError("eiv_cost_gradient: var_U and cov_YU need one value per frequency");
+  const Eigen::Index n = model.A.rows();
+  if (model.B.rows() != n || model.B.cols() != 1 || model.C.rows() != 1 || model.C.cols() != n ||
+      model.D.rows() != 1 || model.D.cols() != 1)
+    throw InputError("model: A, B, C, D are not the shapes of an order-" + std::to_string(n) + " SISO model");
+  const MatrixC B = model.B.cast<Complex>(), C = model.C.cast<Complex>();
+  const MatrixC I = MatrixC::Identity(n, n);
+  Complex sum_D(0);
+  MatrixC sum_C = MatrixC::Zero(n, 1), sum_B = MatrixC::Zero(1, n), sum_A = MatrixC::Zero(n, n);
+  CostGradient g;
+  g.cost = 0;
+  for (std::size_t k = 0; k < data.omega.size(); ++k) {
+    const Real& w = data.omega[k];
+    const Complex xi = model.domain == "discrete" ? Complex(cos(w), sin(w)) : Complex(Real(0), w);
+    MatrixC X;
+    if (!resolvent_solve(model.A, xi, I, &X))
+      throw InputError("eiv_cost_gradient: omega = " + fmt(w) + " at " + at(k) + " is on a pole of the model");
+    const MatrixC XB = X * B, CX = C * X;
+    const Complex G = Complex(model.D(0, 0)) + (C * XB)(0, 0), U = data.U[k](0, 0);
+    const Complex e = data.Y[k](0, 0) - G * U;
+    const Real v = data.variance[k](0, 0) + std::norm(G) * var_U[k] - 2 * (cov_YU[k] * std::conj(G)).real();
+    if (!(v > 0)) throw InputError("eiv_cost_gradient: the variance of the residual at " + at(k) + " is not positive");
+    g.cost += std::norm(e) / v;
+    const Complex wk = -U * std::conj(e) / v - (std::norm(e) / (v * v)) * (std::conj(G) * var_U[k] - std::conj(cov_YU[k]));
+    sum_D += wk;
+    sum_C += XB * wk;
+    sum_B += wk * CX;
+    sum_A += XB * wk * CX;
+  }
+  g.dD = MatrixR::Constant(1, 1, 2 * sum_D.real());
+  g.dC = Real(2) * sum_C.real().transpose();
+  g.dB = Real(2) * sum_B.real().transpose();
+  g.dA = Real(2) * sum_A.real().transpose();
+  return g;
+}
+
 std::vector<std::vector<MatrixC>> period_spectra(const std::vector<std::vector<Real>>& channels,
                                                  int period, int periods,
                                                  const std::vector<int>& lines) {

@@ -28,7 +28,25 @@ struct RefineOptions {
   int periods = 0;             ///< M (Sample): the expected cost and the SML loss factor need it, M ≥ 4
   bool allow_unstable = false; ///< keep unstable starting poles and do not constrain the poles
   int max_iterations = 200;    ///< Levenberg–Marquardt iterations (Ceres)
+  /// Errors-in-variables (SISO periodic data, U = Û ≠ 1; empty: output noise
+  /// only): per line k the variance σ²_U,k of Û_k and the covariance
+  /// σ_YU,k = E[δŶ conj δÛ] of the means (eiv_input_noise). The cost is then
+  /// V = Σ_k |Ŷ_k − G Û_k|² / (σ²_Y,k + |G|² σ²_U,k − 2 Re(σ_YU,k conj G)),
+  /// the frequency-domain EIV ML cost (Pintelon & Schoukens 2012, Ch. 10; its
+  /// SML form when the variances are sample variances over M periods: each
+  /// denominator is then the sample variance of (Y_l − G U_l)/M over the
+  /// periods, positive, and each term F(2, 2M − 2) at the true G).
+  Eigen::VectorXd input_variance;
+  Eigen::VectorXcd input_output_covariance;
 };
+
+/// The errors-in-variables noise of SISO sample statistics for RefineOptions:
+/// σ̂²_U/M and σ̂_YU/M per line (the variances of the means).
+void eiv_input_noise(const SampleStatistics& stats, RefineOptions& options);
+
+/// The cost refine_ml minimises, for a model: v_sub (Eq. 35) for output noise,
+/// the errors-in-variables cost of RefineOptions when it has input noise.
+double refine_cost(const FrfData& data, const StateSpace& model, const RefineOptions& options);
 
 /// One pole of the refined model with its standard deviation from the
 /// Cramér–Rao bound. Frequency and damping are read in s (continuous time;

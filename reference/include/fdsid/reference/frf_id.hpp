@@ -161,6 +161,22 @@ struct CostGradient {
 /// Approach (2012), Ch. 9 (Jacobian of the ML cost of state-space models).
 CostGradient cost_gradient(const Model& model, const FrfData& data);
 
+/// The errors-in-variables cost of SISO data (Pintelon & Schoukens 2012,
+/// Ch. 10) and its gradient in θ = (A, B, C, D):
+///   V = Σ_k |e_k|² / v_k,  e_k = Y_k − G_k U_k,
+///   v_k = σ²_Y,k + |G_k|² σ²_U,k − 2 Re(σ_YU,k conj G_k)
+/// (σ²_Y,k = data.variance, σ²_U,k = var_U[k], σ_YU,k = cov_YU[k]).
+/// Derivation: dV = Σ_k [2 Re(conj(e) de)/v − |e|² dv/v²] with de = −dG U and
+/// dv = 2 Re(dG (conj(G) σ²_U − conj(σ_YU))), so dV = 2 Re Σ_k w_k dG_k with
+/// w_k = −U_k conj(e_k)/v_k − (|e_k|²/v_k²)(conj(G_k) σ²_U,k − conj(σ_YU,k)),
+/// and with dG = dD + dC X B + C X dA X B + C X dB as in cost_gradient:
+///   ∂V/∂D = 2 Re Σ w,  ∂V/∂C = 2 Re Σ (X B w)ᵀ,  ∂V/∂B = 2 Re Σ (w C X)ᵀ,
+///   ∂V/∂A = 2 Re Σ (X B w C X)ᵀ.
+/// Throws InputError as cost_gradient, for data that are not SISO with one
+/// column, for var_U / cov_YU not of length F, and for v_k ≤ 0.
+CostGradient eiv_cost_gradient(const Model& model, const FrfData& data, const std::vector<Real>& var_U,
+                               const std::vector<Complex>& cov_YU);
+
 /// Eq. (4): DFT Z(k) = (1/√N) Σ_t z(t) e^{−j2πkt/N} of each period of a record of
 /// `periods` whole periods of length N = `period` (one std::vector<Real> per
 /// channel, each of length periods·period), at the given lines k
