@@ -33,11 +33,42 @@ struct IdentifyFrfCommand {
   std::vector<double> noise_std;  ///< --noise-std: known output noise (records), else the sample variance
 };
 
-// The noise model the data's variances stand for (RefineNoise).
-RefineOptions refine_options(const IdentifyFrfCommand& c, const FrfData& data, const FrfSource& source) {
+// The lines of `stats` at the frequencies of `kept` (the errors-in-variables
+// treatment drops lines of low input SNR, Eq. 34; the refinement and its
+// uncertainty bands use the same lines as the subspace estimate).
+SampleStatistics lines_of(const SampleStatistics& stats, const Eigen::VectorXd& kept) {
+  SampleStatistics s = stats;
+  s.data.U.clear();
+  s.data.Y.clear();
+  s.data.variance.clear();
+  s.var_U.clear();
+  s.cov_YU.clear();
+  std::vector<double> omega;
+  for (int k = 0, j = 0; k < stats.data.frequencies() && j < kept.size(); ++k)
+    if (stats.data.omega(k) == kept(j)) {
+      omega.push_back(kept(j++));
+      s.data.U.push_back(stats.data.U[k]);
+      s.data.Y.push_back(stats.data.Y[k]);
+      s.data.variance.push_back(stats.data.variance[k]);
+      s.var_U.push_back(stats.var_U[k]);
+      s.cov_YU.push_back(stats.cov_YU[k]);
+    }
+  s.data.omega = Eigen::Map<const Eigen::VectorXd>(omega.data(), static_cast<Eigen::Index>(omega.size()));
+  return s;
+}
+
+// The noise model the data's variances stand for (RefineNoise); --eiv: the
+// sample variances of input and output and their covariance (Section 5's
+// errors-in-variables noise), on the lines the subspace estimate used.
+RefineOptions refine_options(const IdentifyFrfCommand& c, const FrfData& data, const FrfSource& source,
+                             const SampleStatistics* eiv_lines) {
   RefineOptions o;
   o.allow_unstable = c.allow_unstable;
-  if (!c.frf_path.empty()) {
+  if (eiv_lines) {
+    o.noise = RefineNoise::Sample;
+    o.periods = source.periods;
+    eiv_input_noise(*eiv_lines, o);
+  } else if (!c.frf_path.empty()) {
     o.noise = data.has_noise_model ? RefineNoise::Known : RefineNoise::None;
   } else if (!c.noise_std.empty()) {
     o.noise = RefineNoise::Known;
@@ -66,10 +97,12 @@ std::string reflected_note(const std::vector<cplx>& reflected, Domain domain) {
          ") and B, D refitted; --allow-unstable keeps them";
 }
 
-nlohmann::json refinement_json(const RefineResult& r, RefineNoise noise) {
+nlohmann::json refinement_json(const RefineResult& r, const RefineOptions& o) {
   using nlohmann::json;
+  const RefineNoise noise = o.noise;
   json j = {{"method", "ml"},
             {"noise_model", to_string(noise)},
+            {"errors_in_variables", o.input_variance.size() > 0},
             {"parametrisation", "real modal form: 2x2 blocks [a b; -b a] per pole pair (discrete: polar rho, phi), "
                                 "1x1 real poles, B, C, D free; continuous time in s / omega_scale"},
             {"solver", "Ceres Solver, Levenberg-Marquardt, dense QR, analytic Jacobian"},
@@ -119,8 +152,11 @@ nlohmann::json refinement_json(const RefineResult& r, RefineNoise noise) {
   return j;
 }
 
-void print_refinement(Out& out, const RefineResult& r, RefineNoise noise, Domain domain, double sample_time) {
-  out << "refined by maximum likelihood (" << to_string(noise) << "): V " << sci(r.cost_subspace) << " -> " << sci(r.cost)
+void print_refinement(Out& out, const RefineResult& r, const RefineOptions& o, Domain domain, double sample_time) {
+  const RefineNoise noise = o.noise;
+  out << "refined by maximum likelihood (" << to_string(noise)
+      << (o.input_variance.size() > 0 ? ", errors-in-variables" : "") << "): V " << sci(r.cost_subspace) << " -> "
+      << sci(r.cost)
       << " in " << r.iterations << " iterations";
   if (noise != RefineNoise::None)
     out << "; expected " << fmt(r.expected_cost, 5) << " under a right model, p " << (r.p_is_bound ? "<= " : "= ")
@@ -197,10 +233,9 @@ int run(const IdentifyFrfCommand& c) {
                 "the 50-digit reference reads records with their sample variance only; drop --precision high "
                 "(or give M >= 4 periods without --noise-std)");
   if (c.options.r < 0 || c.options.r_max < 0) throw Error(ErrorKind::Input, "--r", "must be positive");
-  if (c.refine && (c.eiv || c.improper))
+  if (c.refine && c.improper)
     throw Error(ErrorKind::Input, "--refine ml",
-                "refines with output noise only; the errors-in-variables ML estimator (noisy input) is not implemented: "
-                "drop --eiv/--improper to refine the output-error model");
+                "refines G (with output or errors-in-variables noise), not the inverse model of --improper: drop one");
   if (c.refine && c.precision == Precision::High)
     throw Error(ErrorKind::Input, "--refine ml", "refines the double-precision estimate; not with --precision high");
   refuse_overwrite(c.plot_path, {c.frf_path, c.data_path, c.meta_path, c.json_path}, "--plot");
@@ -261,14 +296,17 @@ int run(const IdentifyFrfCommand& c) {
   }
   // Stable models (issue 15): unstable subspace poles are reflected, and the
   // refinement keeps them stable, unless --allow-unstable.
-  const RefineOptions ro = refine_options(c, data, source);
+  // --eiv: the refinement fits G to (Û, Ŷ) of the lines kept, not to their ratio.
+  const bool eiv_refine = c.refine && c.eiv;
+  const SampleStatistics eiv_lines = eiv_refine ? lines_of(stats, data.omega) : SampleStatistics{};
+  const RefineOptions ro = refine_options(c, data, source, eiv_refine ? &eiv_lines : nullptr);
   RefineResult refined;
   std::string stabilised;
   try {
     if (c.refine) {
-      refined = refine_ml(data, res.model, ro);
+      refined = refine_ml(eiv_refine ? eiv_lines.data : data, res.model, ro);
       res.model = refined.model;
-      res.v_sub = refined.cost;
+      res.v_sub = eiv_refine ? v_sub(refined.model, data) : refined.cost;
       if (!refined.reflected.empty()) stabilised = reflected_note(refined.reflected, res.model.domain);
     } else if (!c.allow_unstable) {
       std::vector<cplx> reflected;
@@ -312,7 +350,7 @@ int run(const IdentifyFrfCommand& c) {
       << ", r = " << res.r << (o.r == 0 ? " (minimising V_SUB)" : "") << "\n";
   print_poles(out, res.poles);
   if (!stabilised.empty()) out << "note: " << stabilised << "\n";
-  if (c.refine) print_refinement(out, refined, ro.noise, res.model.domain, res.model.sample_time);
+  if (c.refine) print_refinement(out, refined, ro, res.model.domain, res.model.sample_time);
   const FitVerdict fit = fit_verdict(res, data, source);
   if (fit.misfit) res.warnings.push_back(fit.warning());
   out << fit.summary() << "\n";
@@ -321,7 +359,7 @@ int run(const IdentifyFrfCommand& c) {
   if (refused_as_unusable(c.strict, res.error_estimate)) return 1;
   nlohmann::json j = to_json(res, method, source);
   j["fit"] = to_json(fit);
-  if (c.refine) j["refinement"] = refinement_json(refined, ro.noise);
+  if (c.refine) j["refinement"] = refinement_json(refined, ro);
   if (!stabilised.empty()) j["stabilised"] = stabilised;
   emit_json(c.json_path, j);
   emit_plot(c.plot_path, plot::frf_figure(data, res, c.refine ? &refined.magnitude_sd : nullptr));
@@ -388,7 +426,7 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
   noise->needs(data)->excludes(eiv)->excludes(improper);
   idf->add_option("--refine", c->refine,
                   "ml: refine the subspace estimate by maximum likelihood (Levenberg-Marquardt, Ceres) for the data's "
-                  "noise model, with Cramer-Rao uncertainties of the poles and of G")
+                  "noise model (with --eiv: input and output noise), with Cramer-Rao uncertainties of the poles and of G")
       ->transform(choice(std::map<std::string, bool>{{"ml", true}, {"none", false}}, "is not ml or none"));
   idf->add_flag("--allow-unstable", c->allow_unstable,
                 "keep unstable poles (default: reflect them into the stable region and refit B, D; a warning names "

@@ -56,7 +56,12 @@ echo "== silverbox: order 2 from block A, held out: block B"
 S=$D/silverbox
 one --data "$S/Schroeder80mV_blockA_11periods.csv" --meta "$S/Schroeder80mV_blockA_11periods.meta.json" --order 2 -- \
   --data "$S/Schroeder80mV_blockB_11periods.csv" --meta "$S/Schroeder80mV_blockB_11periods.meta.json"
+echo " errors-in-variables (--eiv: the measured input is noisy too)"
+one --data "$S/Schroeder80mV_blockA_11periods.csv" --meta "$S/Schroeder80mV_blockA_11periods.meta.json" --order 2 --eiv -- \
+  --data "$S/Schroeder80mV_blockB_11periods.csv" --meta "$S/Schroeder80mV_blockB_11periods.meta.json"
 
 echo "== cubic-feedback circuit (oddms): order 2 from realisation R00, held out: R01"
 C=$D/cubic-feedback-circuit-pxi
 one --data "$C/oddms_R00.csv" --meta "$C/oddms.meta.json" --order 2 -- --data "$C/oddms_R01.csv" --meta "$C/oddms.meta.json"
+echo " errors-in-variables (--eiv)"
+one --data "$C/oddms_R00.csv" --meta "$C/oddms.meta.json" --order 2 --eiv -- --data "$C/oddms_R01.csv" --meta "$C/oddms.meta.json"

@@ -1403,8 +1403,22 @@ TEST_F(CliFrf, RefineMlOnRecords) {
 TEST_F(CliFrf, RefineAndUsePeriodsRefusals) {
   simulate(64, 6, 1e-3, "rec");
   const std::string d = path("rec.csv"), m = path("rec.meta.json");
-  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", d, "--meta", m, "--order", "4", "--eiv", "--refine", "ml"}),
-                         {"--refine ml", "errors-in-variables"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", d, "--meta", m, "--order", "4", "--improper", "--refine", "ml"}),
+                         {"--refine ml", "--improper"}));
+  // --eiv --refine ml: the errors-in-variables ML estimator on (U, Y) of the
+  // lines the subspace estimate kept (issue 15, item 1).
+  const RunResult e = run_fdsid({"identify-frf", "--data", d, "--meta", m, "--order", "4", "--r", "8", "--eiv",
+                                 "--refine", "ml", "--json", path("eiv.json")});
+  ASSERT_TRUE(Succeeded(e)) << describe(e);
+  EXPECT_NE(e.out.find("refined by maximum likelihood (sample_variance, errors-in-variables)"), std::string::npos) << e.out;
+  const json j = read_json("eiv.json");
+  const json& f = j["refinement"];
+  EXPECT_EQ(f["errors_in_variables"], true);
+  EXPECT_LE(f["cost"].get<double>(), f["cost_subspace"].get<double>());
+  // the F = 16 excited lines of P = 64, less those Eq. (34) dropped
+  EXPECT_EQ(f["terms"].get<int>() + j["source"]["errors_in_variables"]["dropped_lines"].get<int>(), 16);
+  EXPECT_EQ(f["magnitude_sd"].size(), static_cast<size_t>(f["terms"].get<int>()));
+  for (const json& row : j["poles"]) EXPECT_LT(std::hypot(row[0].get<double>(), row[1].get<double>()), 1.0);
   EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", d, "--meta", m, "--skip-periods", "2", "--use-periods", "5"}),
                          {"--use-periods", "4 periods that remain"}));
 }
