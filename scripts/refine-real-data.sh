@@ -65,3 +65,8 @@ C=$D/cubic-feedback-circuit-pxi
 one --data "$C/oddms_R00.csv" --meta "$C/oddms.meta.json" --order 2 -- --data "$C/oddms_R01.csv" --meta "$C/oddms.meta.json"
 echo " errors-in-variables (--eiv)"
 one --data "$C/oddms_R00.csv" --meta "$C/oddms.meta.json" --order 2 --eiv -- --data "$C/oddms_R01.csv" --meta "$C/oddms.meta.json"
+
+echo "== figure: F-16 order 20, discrete time, --method orthogonal, refined (docs/figures/f16_refined.png, 2-sigma bands)"
+"$B/fdsid" identify-frf --data "$F/F16Data_FullMSine_Level1.csv" --meta "$F/F16Data_FullMSine.meta.json" --input Voltage \
+  --output Acceleration1 --skip-periods 1 --use-periods 4 --method orthogonal --order 20 --refine ml \
+  --plot docs/figures/f16_refined.png > docs/figures/f16_refined.txt
