@@ -165,16 +165,11 @@ TEST(FrfNoiseFree, MimoTwoByTwoFrf) {
   expect_noise_free(sys, res, d);
 }
 
-TEST(BilinearToContinuous, MatchesTheWDomainModelOnTheImaginaryAxis) {
-  // G_c(jω) = G_w(w(jω)), w = (jω/ω_s − 1)/(jω/ω_s + 1). Tolerance: the
-  // back-transformation solves with I − A_w (relative error ≤ γ_{4n} cond(I − A_w)
-  // in A, B, C, D; Higham Thm 9.4 with a factor 4 for the products),
-  // amplified into G by s(ξ) (frf_tolerance.hpp), plus the evaluation of both
-  // transfers by LU, ≤ γ_{4n} cond(ξI − A) ‖terms‖ each:
-  //   tol(ω) = 4n u [cond(I − A_w) s_c(jω) + cond(wI − A_w) s_w(w) + cond(jωI − A_c) s_c(jω)].
-  std::mt19937_64 rng(5);
+// A random stable w-domain model (entries of A uniform in ±0.35, of B, C, D
+// in ±1), 3 outputs and 2 inputs, for the back-transformation tests.
+StateSpace random_w_model(unsigned seed, int n) {
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1, 1);
-  const int n = 5;
   StateSpace w;
   w.A = Eigen::MatrixXd::Zero(n, n);
   for (int i = 0; i < n; ++i)
@@ -182,14 +177,28 @@ TEST(BilinearToContinuous, MatchesTheWDomainModelOnTheImaginaryAxis) {
   w.B = Eigen::MatrixXd::NullaryExpr(n, 2, [&] { return u(rng); });
   w.C = Eigen::MatrixXd::NullaryExpr(3, n, [&] { return u(rng); });
   w.D = Eigen::MatrixXd::NullaryExpr(3, 2, [&] { return u(rng); });
+  return w;
+}
+
+// The 2-norm condition number.
+double cond(const Eigen::MatrixXcd& X) {
+  const Eigen::VectorXd s = fdsid::testing::singular_values(Eigen::MatrixXcd(X));
+  return s(0) / s(s.size() - 1);
+}
+
+TEST(BilinearToContinuous, MatchesTheWDomainModelOnTheImaginaryAxis) {
+  // G_c(jω) = G_w(w(jω)), w = (jω/ω_s − 1)/(jω/ω_s + 1). Tolerance: the
+  // back-transformation solves with I − A_w (relative error ≤ γ_{4n} cond(I − A_w)
+  // in A, B, C, D; Higham Thm 9.4 with a factor 4 for the products),
+  // amplified into G by s(ξ) (frf_tolerance.hpp), plus the evaluation of both
+  // transfers by LU, ≤ γ_{4n} cond(ξI − A) ‖terms‖ each:
+  //   tol(ω) = 4n u [cond(I − A_w) s_c(jω) + cond(wI − A_w) s_w(w) + cond(jωI − A_c) s_c(jω)].
+  const int n = 5;
+  const StateSpace w = random_w_model(5, n);
   ASSERT_LT(fdsid::testing::eigenvalues(w.A).cwiseAbs().maxCoeff(), 1.0);
   const double ws = 7.5;
   const StateSpace c = bilinear_to_continuous(w, ws);
   EXPECT_EQ(c.domain, Domain::Continuous);
-  auto cond = [](const Eigen::MatrixXcd& X) {
-    const Eigen::VectorXd s = fdsid::testing::singular_values(Eigen::MatrixXcd(X));
-    return s(0) / s(s.size() - 1);
-  };
   const Eigen::MatrixXcd I = Eigen::MatrixXcd::Identity(n, n);
   const double c_iaw = cond(I - w.A.cast<cplx>());
   double worst = 0;
@@ -325,24 +334,12 @@ TEST(BilinearToDiscrete, MatchesTheWDomainModelOnTheUnitCircle) {
   // back-transformation (frf_tolerance.hpp: relative ≤ 4n u cond(I − A')
   // (1 + cond(I − A_w)) in A_z, B_z, C_z, D_z):
   //   tol(ω) = 4n u [cond(I − A')(1 + cond(I − A_w)) s_z(z) + cond(wI − A_w) s_w(w) + cond(zI − A_z) s_z(z)].
-  std::mt19937_64 rng(6);
-  std::uniform_real_distribution<double> u(-1, 1);
   const int n = 5;
-  StateSpace w;
-  w.A = Eigen::MatrixXd::Zero(n, n);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) w.A(i, j) = 0.35 * u(rng);
-  w.B = Eigen::MatrixXd::NullaryExpr(n, 2, [&] { return u(rng); });
-  w.C = Eigen::MatrixXd::NullaryExpr(3, n, [&] { return u(rng); });
-  w.D = Eigen::MatrixXd::NullaryExpr(3, 2, [&] { return u(rng); });
+  const StateSpace w = random_w_model(6, n);
   ASSERT_LT(fdsid::testing::eigenvalues(w.A).cwiseAbs().maxCoeff(), 1.0);
   const double ws = 0.2;
   const StateSpace z = bilinear_to_discrete(w, ws);
   EXPECT_EQ(z.domain, Domain::Discrete);
-  auto cond = [](const Eigen::MatrixXcd& X) {
-    const Eigen::VectorXd s = fdsid::testing::singular_values(Eigen::MatrixXcd(X));
-    return s(0) / s(s.size() - 1);
-  };
   const Eigen::MatrixXcd I = Eigen::MatrixXcd::Identity(n, n);
   const double c_back = cond(I - testing::continuous_to_bilinear(z, 1.0).A.cast<cplx>()) *
                         (1 + cond(I - w.A.cast<cplx>()));

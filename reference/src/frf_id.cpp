@@ -479,6 +479,19 @@ struct Estimate {
   std::vector<Real> singular_values;
 };
 
+// An estimate's (A, B, C, D) as a Model (for the back-transformations), and back.
+Model model_of(const Estimate& e) {
+  Model m;
+  m.A = e.A;
+  m.B = e.B;
+  m.C = e.C;
+  m.D = e.D;
+  return m;
+}
+Estimate estimate_of(const Model& m, const std::vector<Real>& singular_values) {
+  return Estimate{m.A, m.B, m.C, m.D, singular_values};
+}
+
 // Algorithm 1 (steps 1-3) with general real polynomial rows: rows_u/rows_y
 // (r × F) hold the basis polynomials at ξ_k; H == nullptr means monomials
 // (shift property Eq. 12), otherwise the generalised shift with
@@ -521,13 +534,7 @@ Estimate algorithm2_1_bilinear(const FrfData& data, const Shape& s, const Real& 
   }
   const MatrixC W = monomial_rows(xi, r);
   const Estimate w = algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r, pert);
-  Model w_model;
-  w_model.A = w.A;
-  w_model.B = w.B;
-  w_model.C = w.C;
-  w_model.D = w.D;
-  const Model cont = bilinear_to_continuous(w_model, scale);
-  return Estimate{cont.A, cont.B, cont.C, cont.D, w.singular_values};
+  return estimate_of(bilinear_to_continuous(model_of(w), scale), w.singular_values);
 }
 
 // Algorithm 2.1 for discrete data (FrfOptions::discrete_method "bilinear"):
@@ -552,14 +559,8 @@ Estimate algorithm2_1_tustin(const FrfData& data, const Shape& s, const Real& sc
   }
   const MatrixC W = monomial_rows(xi, r);
   const Estimate w = algorithm1(data, s, xi, W, W, nullptr, Real(1), n, r, pert);
-  Model w_model;
-  w_model.A = w.A;
-  w_model.B = w.B;
-  w_model.C = w.C;
-  w_model.D = w.D;
-  const Model tustin = bilinear_to_continuous(w_model, ts);
-  const Model z = bilinear_to_continuous(tustin, Real(1));
-  return Estimate{z.A, z.B, z.C, z.D, w.singular_values};
+  const Model tustin = bilinear_to_continuous(model_of(w), ts);
+  return estimate_of(bilinear_to_continuous(tustin, Real(1)), w.singular_values);
 }
 
 // Algorithm 2.2: Algorithm 1 with ξ = s̃ = jω/ω_scale and the monomial rows
@@ -592,13 +593,7 @@ Estimate algorithm2_2_tustin(const FrfData& data, const Shape& s, const Real& sc
   FrfData tan_axis = data;
   for (Real& w : tan_axis.omega) w = tan(w / 2);
   const Estimate sp = algorithm2_2_orthogonal(tan_axis, s, tan(scale / 2), n, r, pert);
-  Model sp_model;
-  sp_model.A = sp.A;
-  sp_model.B = sp.B;
-  sp_model.C = sp.C;
-  sp_model.D = sp.D;
-  const Model z = bilinear_to_continuous(sp_model, Real(1));
-  return Estimate{z.A, z.B, z.C, z.D, sp.singular_values};
+  return estimate_of(bilinear_to_continuous(model_of(sp), Real(1)), sp.singular_values);
 }
 
 }  // namespace
