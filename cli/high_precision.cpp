@@ -520,7 +520,7 @@ CandidateSettings candidate_settings(const json& cj, const FrfCheckRequest& q, c
     throw Error(ErrorKind::Input, q.model_path, "a discrete-time model with a continuous-time method \"" + jm + "\"");
   if (c.domain == Domain::Continuous && jm.rfind("discrete", 0) == 0)
     throw Error(ErrorKind::Input, q.model_path, "a continuous-time model with a discrete-time method (pintelon2002-alg1)");
-  // The candidate's basis in --method's words (monomial/bilinear in discrete time).
+  // The candidate's basis in --method's words (monomial, bilinear or orthogonal in discrete time).
   const std::string jm_cli = jm == "discrete" ? "monomial" : jm.rfind("discrete-", 0) == 0 ? jm.substr(9) : jm;
   FrfOptions chosen;
   set_frf_method(q.method, c.domain, chosen);  // a name of the other domain: refused as such

@@ -243,6 +243,10 @@ int run(const IdentifyFrfCommand& c) {
   Out out{c.json_path == "-"};
   FrfOptions o = c.options;
   set_frf_method(c.method, c.domain, o);
+  if (c.domain == Domain::Discrete && o.discrete == DiscreteMethod::Monomial && o.omega_scale > 0)
+    throw Error(ErrorKind::Input, "--omega-scale",
+                "scales Algorithm 2's bases; Algorithm 1's monomial basis (discrete time) has none: drop it, or give "
+                "--method bilinear or orthogonal");
   const std::string where = from_frf ? c.frf_path : c.data_path;
 
   FrfSource source;
@@ -397,11 +401,11 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
                          "is neither discrete nor continuous"));
   idf->add_option("--method", c->method,
                   "the basis: continuous time bilinear (Algorithm 2.1, default) or orthogonal (2.2); discrete time "
-                  "monomial (Algorithm 1, default) or bilinear (Algorithm 2.1 on the Tustin frequencies tan(omega/2): "
-                  "for a band that covers a small arc of the unit circle)");
+                  "monomial (Algorithm 1, default), bilinear or orthogonal (Algorithm 2.1 / 2.2 on the Tustin "
+                  "frequencies tan(omega/2): for a band that covers a small arc of the unit circle)");
   idf->add_option("--omega-scale", o.omega_scale,
-                  "frequency scaling of Algorithm 2 (default sqrt(w_min w_max); discrete bilinear: rad/sample in (0, pi), "
-                  "default 2 atan sqrt(tan(w_min/2) tan(w_max/2)))");
+                  "frequency scaling of Algorithm 2 (default sqrt(w_min w_max); discrete bilinear/orthogonal: rad/sample "
+                  "in (0, pi), default 2 atan sqrt(tan(w_min/2) tan(w_max/2)))");
   idf->add_option("--precision", c->precision, "double (default) or high")
       ->transform(choice(kPrecisions, "is not double or high"));
   auto* eiv = idf->add_flag("--eiv", c->eiv,

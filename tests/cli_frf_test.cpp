@@ -976,6 +976,11 @@ TEST_F(CliFrf, ANarrowBandNamesTheBandNotTheVariances) {
   EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--method", "monomial", "--domain",
                                     "continuous"}),
                          {"--method", "discrete-time"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--omega-scale", "0.1"}),
+                         {"--omega-scale", "monomial", "--method bilinear"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "4", "--method", "bilinear", "--omega-scale",
+                                    "4"}),
+                         {"omega_scale", "(0, pi)"}));
 }
 
 // identify-frf --precision high repeats Section 5's treatments as check does:
