@@ -6,6 +6,7 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <map>
 #include <string>
 
 #include "fdsid/compare.hpp"
@@ -370,18 +371,23 @@ T setting(const char* name, const T& from_json, const T& from_cli, const T& none
   return from_json != none ? from_json : from_cli;
 }
 
-// Reads the candidate's method name: empty, "discrete" (Algorithm 1),
-// "discrete-bilinear" / "discrete-orthogonal" (discrete data in Algorithm 2's
-// bases, DiscreteMethod),
-// "bilinear" or "orthogonal" (Algorithm 2.1 / 2.2).
-std::string candidate_method(const json& cj, const std::string& model_path) {
-  if (!cj.contains("method")) return "";
+// The candidate's "method" (frf_method_name's names): the domain it belongs
+// to and its basis in --method's words; an empty basis when the JSON has none.
+struct CandidateMethod {
+  std::string name;
+  Domain domain = Domain::Discrete;
+  std::string basis;
+};
+CandidateMethod candidate_method(const json& cj, const std::string& model_path) {
+  if (!cj.contains("method")) return {};
   const std::string m = cj["method"].is_string() ? cj["method"].get<std::string>() : "";
-  if (m == "pintelon2002-alg1") return "discrete";
-  if (m == "pintelon2002-alg1-bilinear") return "discrete-bilinear";
-  if (m == "pintelon2002-alg1-orthogonal") return "discrete-orthogonal";
-  if (m == "pintelon2002-alg2-bilinear") return "bilinear";
-  if (m == "pintelon2002-alg2-orthogonal") return "orthogonal";
+  static const std::map<std::string, std::pair<Domain, const char*>> known = {
+      {"pintelon2002-alg1", {Domain::Discrete, "monomial"}},
+      {"pintelon2002-alg1-bilinear", {Domain::Discrete, "bilinear"}},
+      {"pintelon2002-alg1-orthogonal", {Domain::Discrete, "orthogonal"}},
+      {"pintelon2002-alg2-bilinear", {Domain::Continuous, "bilinear"}},
+      {"pintelon2002-alg2-orthogonal", {Domain::Continuous, "orthogonal"}}};
+  if (const auto it = known.find(m); it != known.end()) return {m, it->second.first, it->second.second};
   if (m == "akcay2011" || m == "vo1997")
     throw Error(ErrorKind::Input, model_path + " field \"method\"",
                 "\"" + m + "\" is a spectral factor; check it against its spectrum with --data SPECTRUM.csv");
@@ -515,17 +521,16 @@ CandidateSettings candidate_settings(const json& cj, const FrfCheckRequest& q, c
   c.domain = candidate.domain;
   c.units = frf_units(cj, q);
   require_frequency_units(c.units, c.domain, !q.frf_path.empty());
-  const std::string jm = candidate_method(cj, q.model_path);
-  if (c.domain == Domain::Discrete && (jm == "bilinear" || jm == "orthogonal"))
-    throw Error(ErrorKind::Input, q.model_path, "a discrete-time model with a continuous-time method \"" + jm + "\"");
-  if (c.domain == Domain::Continuous && jm.rfind("discrete", 0) == 0)
-    throw Error(ErrorKind::Input, q.model_path, "a continuous-time model with a discrete-time method (pintelon2002-alg1)");
-  // The candidate's basis in --method's words (monomial, bilinear or orthogonal in discrete time).
-  const std::string jm_cli = jm == "discrete" ? "monomial" : jm.rfind("discrete-", 0) == 0 ? jm.substr(9) : jm;
+  const CandidateMethod jm = candidate_method(cj, q.model_path);
+  if (!jm.basis.empty() && jm.domain != c.domain)
+    throw Error(ErrorKind::Input, q.model_path,
+                std::string(c.domain == Domain::Discrete ? "a discrete-time model with a continuous-time method \""
+                                                         : "a continuous-time model with a discrete-time method \"") +
+                    jm.name + "\"");
   FrfOptions chosen;
   set_frf_method(q.method, c.domain, chosen);  // a name of the other domain: refused as such
   const std::string method_s =
-      setting<std::string>("method", jm_cli, q.method, "", q.model_path, jm_cli, q.method);
+      setting<std::string>("method", jm.basis, q.method, "", q.model_path, jm.basis, q.method);
   set_frf_method(method_s, c.domain, chosen);
   c.method = chosen.continuous;
   c.discrete = chosen.discrete;

@@ -174,8 +174,9 @@ void print_refinement(Out& out, const RefineResult& r, const RefineOptions& o, D
 
 // --precision high: the reference identifies for a given order and r; the
 // automatic choices (Section 5) are made once, in double precision, and reported.
-int run_high(const IdentifyFrfCommand& c, const FrfData& data, const SampleStatistics& stats, const FrfSource& source,
-             const std::string& where) {
+// `chosen`: the command's options with --method resolved (set_frf_method).
+int run_high(const IdentifyFrfCommand& c, const FrfOptions& chosen, const FrfData& data, const SampleStatistics& stats,
+             const FrfSource& source, const std::string& where) {
   if (!c.plot_path.empty())
     throw Error(ErrorKind::Input, "--plot", "is drawn from the double-precision result; not with --precision high");
   FrfHighRequest q;
@@ -188,8 +189,6 @@ int run_high(const IdentifyFrfCommand& c, const FrfData& data, const SampleStati
   q.meta_path = c.meta_path;
   q.selection = c.selection;
   q.continuous = c.domain == Domain::Continuous;
-  FrfOptions chosen = c.options;
-  set_frf_method(c.method, c.domain, chosen);
   q.orthogonal = chosen.continuous == ContinuousMethod::Orthogonal;
   q.discrete = chosen.discrete;
   q.omega_scale = c.options.omega_scale;
@@ -282,7 +281,7 @@ int run(const IdentifyFrfCommand& c) {
     source.eiv_variance = c.eiv_variance;
     source.min_input_snr = c.min_input_snr;
   }
-  if (c.precision == Precision::High) return run_high(c, data, stats, source, where);
+  if (c.precision == Precision::High) return run_high(c, o, data, stats, source, where);
 
   const std::string method = frf_method_name(c.domain, o.continuous, o.discrete);
   FrfResult res;

@@ -1104,6 +1104,10 @@ FrfData record_known_noise(const Eigen::MatrixXd& samples, int inputs, const Rec
   return d;
 }
 
+double eiv_residual_variance(double var_y, double var_u, cplx cov_yu, cplx G) {
+  return var_y + std::norm(G) * var_u - 2 * (cov_yu * std::conj(G)).real();
+}
+
 namespace {
 
 // Ratio data with the first-order variance of Eq. (31) (corrected) for
@@ -1136,7 +1140,7 @@ FrfData ratio_data(const SampleStatistics& st, bool swap, const StateSpace* firs
     double var;
     if (first_pass && !swap) {
       const cplx G1 = frequency_response(*first_pass, s.omega(k))(0, 0);
-      var = (vnum + std::norm(G1) * vden - 2 * (std::conj(G1) * cnd).real()) / std::norm(den);
+      var = eiv_residual_variance(vnum, vden, cnd, G1) / std::norm(den);
     } else {
       // Eq. (31) with the conjugate of the denominator in the cross term.
       var = std::norm(G) * (vnum / std::norm(num) + vden / std::norm(den) - 2 * (cnd / (num * std::conj(den))).real());

@@ -350,7 +350,7 @@ class EivCost final : public ceres::CostFunction {
     for (int k = 0; k < F; ++k) {
       const cplx G = -cplx(g_[2 * k], g_[2 * k + 1]), U = d_.U[k](0, 0);
       const cplx e = d_.Y[k](0, 0) - G * U;
-      const double v = d_.variance[k](0, 0) + std::norm(G) * su_(k) - 2 * (syu_(k) * std::conj(G)).real();
+      const double v = eiv_residual_variance(d_.variance[k](0, 0), su_(k), syu_(k), G);
       if (!(v > 0) || !std::isfinite(v)) return false;
       const double sq = std::sqrt(v);
       residuals[2 * k] = e.real() / sq;
@@ -529,8 +529,7 @@ double refine_cost(const FrfData& data, const StateSpace& model, const RefineOpt
   for (int k = 0; k < data.frequencies(); ++k) {
     const cplx g = G[k](0, 0);
     v += std::norm(data.Y[k](0, 0) - g * data.U[k](0, 0)) /
-         (data.variance[k](0, 0) + std::norm(g) * opt.input_variance(k) -
-          2 * (opt.input_output_covariance(k) * std::conj(g)).real());
+         eiv_residual_variance(data.variance[k](0, 0), opt.input_variance(k), opt.input_output_covariance(k), g);
   }
   return v;
 }
@@ -642,13 +641,9 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
   // |G| and ∠G standard deviations: the Jacobian of G from the same residuals
   // with U = I, Y = 0, σ = 1 (then r = −G and its Jacobian is −∂G/∂θ).
   if (res.covariance.size() > 0) {
-    FrfData unit = data;
     const int m = data.inputs(), p = data.outputs();
-    for (int k = 0; k < data.frequencies(); ++k) {
-      unit.U[k] = Eigen::MatrixXcd::Identity(m, m);
-      unit.Y[k] = Eigen::MatrixXcd::Zero(p, m);
-      unit.variance[k] = Eigen::MatrixXd::Ones(p, m);
-    }
+    const FrfData unit =
+        frf_data(data.domain, data.omega, std::vector<Eigen::MatrixXcd>(data.frequencies(), Eigen::MatrixXcd::Zero(p, m)));
     Eigen::VectorXd g;
     const Eigen::MatrixXd JG = jacobian(unit, lay, th, g);
     res.magnitude_sd.assign(data.frequencies(), Eigen::MatrixXd::Zero(p, m));

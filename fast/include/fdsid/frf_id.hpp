@@ -297,6 +297,12 @@ FrfData record_known_noise(const Eigen::MatrixXd& samples, int inputs, const Rec
 /// halves the bias of the Ĝ-based weight, but |Û|² in the denominator still
 /// correlates with Ĝ = Ŷ/Û, leaving a relative bias ≈ −σ²_U/(M|U₀|²) that does
 /// not vanish as F grows (−1.6e-3 at an input SNR of 600). Open.
+/// The variance of Y − G U when Y and U carry noise of variances var_y, var_u
+/// and covariance cov_yu = E[δY conj δU]: var_y + |G|² var_u − 2 Re(cov_yu conj G)
+/// (SISO). The first-pass weight of errors_in_variables (times 1/|Û|²) and the
+/// denominator of the errors-in-variables ML cost (refine.hpp).
+double eiv_residual_variance(double var_y, double var_u, cplx cov_yu, cplx G);
+
 FrfData errors_in_variables(const SampleStatistics& stats, const StateSpace* first_pass = nullptr,
                             double min_input_snr = 10.0, int* dropped = nullptr);
 
