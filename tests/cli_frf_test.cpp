@@ -1214,20 +1214,40 @@ TEST_F(CliFrf, ValidateScoresAModelOnARecord) {
 // and --strict turns "unusable" into exit 1 with nothing written. An order
 // above the data's (6 for the fourth-order plant, noise-free) puts sigma_5,
 // sigma_6 of step 1c at the rounding level: the condition sigma_1/sigma_6 is
-// ~1/u and the estimate u * condition reaches 1.
+// ~1/u and the estimate u * condition reaches 1. Which of two honest outcomes
+// follows is itself decided by rounding: the two rounding-level singular
+// vectors make step 2's shifted observability matrix rank deficient or not
+// (on one build, r = 9, 10, 12 refused and r = 8, 11, 14 warned; a change of
+// the QR's blocking moved r = 10 from one to the other). Either way the user
+// must hear it: exit 0 with the UNUSABLE warning (and usable = false in the
+// JSON), or exit 2 naming step 2's rank; and --strict never writes the model.
 TEST_F(CliFrf, AnUnusableEstimateIsSaidAndStrictRefusesIt) {
   const std::string d = write("clean.csv", frf_csv(pintelon_plant(), discrete_grid(60), 1e-6));
-  const RunResult r = run_fdsid({"identify-frf", "--frf", d, "--order", "6", "--r", "10", "--json", path("m.json")});
-  ASSERT_EQ(r.status, 0) << describe(r);
-  EXPECT_NE(r.out.find("warning: UNUSABLE in double precision"), std::string::npos) << r.out;
-  const json m = read_json("m.json");
-  EXPECT_FALSE(m["diagnostics"]["usable"].get<bool>());
-  EXPECT_GE(m["diagnostics"]["error_estimate"].get<double>(), 1.0);
-  const RunResult s = run_fdsid({"identify-frf", "--frf", d, "--order", "6", "--r", "10", "--strict", "--json",
-                                 path("strict.json")});
-  EXPECT_EQ(s.status, 1) << describe(s);
-  EXPECT_NE(s.err.find("--strict: the estimate is unusable"), std::string::npos) << s.err;
-  EXPECT_FALSE(fs::exists(path("strict.json")));
+  int warned = 0;
+  for (const std::string r_value : {"8", "10", "11"}) {
+    const std::string json_path = path("m" + r_value + ".json");
+    const RunResult r = run_fdsid({"identify-frf", "--frf", d, "--order", "6", "--r", r_value, "--json", json_path});
+    if (r.status == 0) {
+      ++warned;
+      EXPECT_NE(r.out.find("warning: UNUSABLE in double precision"), std::string::npos) << r.out;
+      const json m = read_json("m" + r_value + ".json");
+      EXPECT_FALSE(m["diagnostics"]["usable"].get<bool>());
+      EXPECT_GE(m["diagnostics"]["error_estimate"].get<double>(), 1.0);
+    } else {
+      EXPECT_TRUE(IsBadInput(r, {"step 2", "rank"})) << describe(r);
+      EXPECT_FALSE(fs::exists(json_path));
+    }
+    const std::string strict_path = path("strict" + r_value + ".json");
+    const RunResult s = run_fdsid({"identify-frf", "--frf", d, "--order", "6", "--r", r_value, "--strict", "--json",
+                                   strict_path});
+    EXPECT_NE(s.status, 0) << describe(s);
+    if (r.status == 0) EXPECT_EQ(s.status, 1) << describe(s);
+    if (s.status == 1) EXPECT_NE(s.err.find("--strict: the estimate is unusable"), std::string::npos) << s.err;
+    EXPECT_FALSE(fs::exists(strict_path));
+  }
+  // The warning path itself must be exercised: all three refusing would leave
+  // it untested here (it is also reached by the unit tests' precision cases).
+  EXPECT_GE(warned, 1);
   // The right order is usable, warns of nothing, and --strict lets it through.
   const RunResult ok = run_fdsid({"identify-frf", "--frf", d, "--order", "4", "--r", "8", "--strict", "--json",
                                   path("ok.json")});

@@ -2,6 +2,7 @@
 #include "fdsid/frf_id.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -50,12 +51,17 @@ class Resolvent {
     Vinv_ = lu.inverse();
     diagonal_ = true;
   }
-  /// K = C (ξI − A)⁻¹ (p × n). Returns false when ξI − A is singular.
+  /// K = C (ξI − A)⁻¹ (p × n). Returns false when ξI − A is singular. The
+  /// diagonal route allocates nothing once K has its size (it runs once per
+  /// frequency in step 3 and V_SUB: F = 10⁵ spent 12 % in malloc/free).
   bool left(cplx xi, Eigen::MatrixXcd& K) const {
     if (diagonal_) {
-      Eigen::VectorXcd d = (xi - lambda_.array()).inverse().matrix();
-      if (!d.allFinite()) return false;
-      K.noalias() = CV_ * d.asDiagonal() * Vinv_;
+      K.setZero(CV_.rows(), CV_.cols());
+      for (Eigen::Index e = 0; e < lambda_.size(); ++e) {
+        const cplx de = 1.0 / (xi - lambda_(e));
+        if (!std::isfinite(de.real()) || !std::isfinite(de.imag())) return false;
+        for (Eigen::Index a = 0; a < K.rows(); ++a) K.row(a) += (CV_(a, e) * de) * Vinv_.row(e);
+      }
       return K.allFinite();
     }
     Eigen::MatrixXcd M = -A_.transpose().cast<cplx>();
@@ -69,7 +75,8 @@ class Resolvent {
   Eigen::MatrixXd A_, C_;
   bool diagonal_ = false;
   Eigen::VectorXcd lambda_;
-  Eigen::MatrixXcd CV_, Vinv_;
+  Eigen::MatrixXcd CV_;
+  Eigen::Matrix<cplx, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Vinv_;  // rows read in left()
 };
 
 // cond₁(R) = ‖R‖₁ ‖R⁻¹‖₁ of an upper-triangular R (within a factor of its
@@ -95,10 +102,13 @@ Eigen::MatrixXd tsqr(int groups, int rows_per_group, int cols, const RowFill& fi
 }
 
 // ---------------------------------------------------------------------------
-// The row bases of Algorithm 1/2: column k of Wu (Wy) holds the r basis
-// functions evaluated at ξ_k for the input (output) rows of Z.
+// The row bases of Algorithm 1/2. Power bases (Algorithm 1, 2.1 and their
+// Tustin variants): row i at ξ_k is ξ_k^i, generated where it is used (by
+// repeated multiplication, i = 0 … r−1) and never stored — at F = 10⁶, r = 40
+// the two r × F tables were 1.3 GB. Orthogonal bases (2.2): column k of Wu
+// (Wy) holds the r polynomials at ξ_k for the input (output) rows of Z.
 struct Bases {
-  Eigen::MatrixXcd Wu, Wy;      // r × F
+  Eigen::MatrixXcd Wu, Wy;      // r × F, orthogonal bases only (empty for power bases)
   Eigen::VectorXcd xi;          // ξ_k used in step 3 (z, w or s/ω_s)
   bool orthogonal = false;
   Eigen::MatrixXd H;            // r × (r−1): s̃ q_j = Σ_i H(i, j) q_i (output basis)
@@ -111,17 +121,36 @@ double default_scale(const FrfData& d) {
   return std::sqrt(d.omega.minCoeff() * d.omega.maxCoeff());
 }
 
-Eigen::MatrixXcd powers(const Eigen::VectorXcd& xi, int r) {
-  Eigen::MatrixXcd W(r, xi.size());
-  for (Eigen::Index k = 0; k < xi.size(); ++k) {
-    cplx v = 1;
-    for (int i = 0; i < r; ++i) {
-      W(i, k) = v;
-      v *= xi(k);
+// Row i of the input and output bases at ξ_{k0} … ξ_{k0+n−1}, for i = 0, 1,
+// … in turn (next()). Power bases advance by one product per row, w ← w ξ
+// from w = 1; orthogonal bases are read from Wu and Wy.
+class BasisRow {
+ public:
+  BasisRow(const Bases& b, Eigen::Index k0, Eigen::Index n) : b_(b), k0_(k0), u_(n), y_(n) { load(); }
+  void next() {
+    ++i_;
+    load();
+  }
+  const Eigen::VectorXcd& u() const { return u_; }
+  const Eigen::VectorXcd& y() const { return b_.orthogonal ? y_ : u_; }
+
+ private:
+  void load() {
+    const Eigen::Index n = u_.size();
+    if (b_.orthogonal) {
+      u_ = b_.Wu.row(i_).segment(k0_, n).transpose();
+      y_ = b_.Wy.row(i_).segment(k0_, n).transpose();
+    } else if (i_ == 0) {
+      u_.setOnes();
+    } else {
+      u_.array() *= b_.xi.segment(k0_, n).array();
     }
   }
-  return W;
-}
+  const Bases& b_;
+  Eigen::Index k0_;
+  int i_ = 0;
+  Eigen::VectorXcd u_, y_;
+};
 
 // Orthonormal real-coefficient polynomials q_0 … q_{r−1} in s̃ for the real
 // inner product ⟨p, q⟩ = Re Σ_k w_k p(s̃_k) conj q(s̃_k), by the Arnoldi
@@ -164,8 +193,6 @@ Bases make_bases(const FrfData& d, int r, ContinuousMethod method, double omega_
   b.xi.resize(F);
   if (d.domain == Domain::Discrete && discrete == DiscreteMethod::Monomial) {
     for (Eigen::Index k = 0; k < F; ++k) b.xi(k) = std::polar(1.0, d.omega(k));
-    b.Wu = powers(b.xi, r);
-    b.Wy = b.Wu;
     return b;
   }
   // Algorithm 2's frequency axis: x_k = ω_k/ω_s (continuous time) or
@@ -185,8 +212,6 @@ Bases make_bases(const FrfData& d, int r, ContinuousMethod method, double omega_
         const double ct = ts * std::cos(d.omega(k) / 2);
         b.xi(k) = (st - ct) / (st + ct);
       }
-      b.Wu = powers(b.xi, r);
-      b.Wy = b.Wu;
       return b;
     }
     for (Eigen::Index k = 0; k < F; ++k) {
@@ -206,8 +231,6 @@ Bases make_bases(const FrfData& d, int r, ContinuousMethod method, double omega_
       const cplx st(0.0, x(k));
       b.xi(k) = (st - 1.0) / (st + 1.0);
     }
-    b.Wu = powers(b.xi, r);
-    b.Wy = b.Wu;
     return b;
   }
   b.orthogonal = true;
@@ -235,20 +258,20 @@ struct Step1 {
 //
 // Purpose: refuse a Z = [𝐔^re; 𝐘^re] of r (m + p) rows and 2 F c columns that
 // is too large or too short, before anything is allocated.
-// Method: work and memory first: the bases (2 r F complex), the TSQR work
+// Method: work and memory first: the bases (2 r F complex, orthogonal bases only), the TSQR work
 // matrix and R (cols² + 2048·cols doubles per thread), C_Y and the SVD
 // (3 ny² doubles), ny = r p.
 // Fails: Error(Resource) above kMaxColumns rows or the memory limit,
 // Error(Dimension) when Z has fewer columns than rows.
 // References: Pintelon (2002) Algorithm 1 step 1.
-void step1_check_size(const FrfData& d, int r) {
+void step1_check_size(const FrfData& d, const Bases& b, int r) {
   const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
   const int ny = r * p, cols = r * m + ny;
   if (cols > kMaxColumns)
     fail(ErrorKind::Resource, "step 1b",
          "r (m + p) = " + std::to_string(cols) + " rows of Z exceed the supported " + std::to_string(kMaxColumns) +
              " (the QR and SVD of step 1 grow as r^3; use a smaller r)");
-  require_memory(32.0 * r * F + 8.0 * (3.0 * cols * cols + 2048.0 * cols) + 24.0 * ny * ny, "identify-frf",
+  require_memory((b.orthogonal ? 32.0 * r * F : 0.0) + 8.0 * (3.0 * cols * cols + 2048.0 * cols) + 24.0 * ny * ny, "identify-frf",
                  "step 1 with F = " + std::to_string(F) + ", r = " + std::to_string(r));
   if (2LL * F * c < cols)
     fail(ErrorKind::Dimension, "step 1b",
@@ -288,26 +311,31 @@ std::string band_advice(const FrfData& d, const Bases& b, int r) {
          "the other --method";
 }
 
+// The chunk is filled column by column (basis row i, channel a), each column
+// a contiguous run of the column-major work matrix: filled row by row it was
+// 80 strided writes per row at r = 40 (a fifth of step 1 at F = 999).
 Eigen::MatrixXd step1ab_qr(const FrfData& d, const Bases& b, int r) {
   const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
   const int nu = r * m, ny = r * p, cols = nu + ny;
-  const RowFill fill = [&](int k, Eigen::Ref<Eigen::MatrixXd> rows) {
-    for (int j = 0; j < c; ++j)
-      for (int i = 0; i < r; ++i) {
-        const cplx wu = b.Wu(i, k), wy = b.Wy(i, k);
-        for (int a = 0; a < m; ++a) {
-          const cplx v = wu * d.U[k](a, j);
-          rows(2 * j, i * m + a) = v.real();
-          rows(2 * j + 1, i * m + a) = v.imag();
-        }
-        for (int a = 0; a < p; ++a) {
-          const cplx v = wy * d.Y[k](a, j);
-          rows(2 * j, nu + i * p + a) = v.real();
-          rows(2 * j + 1, nu + i * p + a) = v.imag();
-        }
+  // Group k's rows 2j, 2j + 1: Re and Im of column j; in column (i, a):
+  // W_i(ξ_k) U_k(a, j) (input block) or W_i(ξ_k) Y_k(a, j) (output block).
+  const auto column = [&](const std::vector<Eigen::MatrixXcd>& X, const Eigen::VectorXcd& w, int a, int g0,
+                          double* out) {
+    for (Eigen::Index k = 0; k < w.size(); ++k)
+      for (int j = 0; j < c; ++j, out += 2) {
+        const cplx v = w(k) * X[g0 + k](a, j);
+        out[0] = v.real();
+        out[1] = v.imag();
       }
   };
-  Eigen::MatrixXd R = tsqr(F, 2 * c, cols, fill);
+  const numerics::ChunkFill fill = [&](int g0, int g1, Eigen::Ref<Eigen::MatrixXd> rows) {
+    BasisRow w(b, g0, g1 - g0);
+    for (int i = 0; i < r; ++i, w.next()) {
+      for (int a = 0; a < m; ++a) column(d.U, w.u(), a, g0, rows.col(i * m + a).data());
+      for (int a = 0; a < p; ++a) column(d.Y, w.y(), a, g0, rows.col(nu + i * p + a).data());
+    }
+  };
+  Eigen::MatrixXd R = numerics::streamed_qr_r(F, 2 * c, cols, fill);
   const Eigen::VectorXd r11 = R.topLeftCorner(nu, nu).diagonal().cwiseAbs();
   const double r11max = r11.maxCoeff();
   if (!numerics::numerically_full_rank(r11, std::sqrt(2.0 * F * c)))
@@ -337,7 +365,8 @@ Eigen::MatrixXd step1c_noise_covariance(const FrfData& d, const Bases& b, int r)
       Eigen::VectorXd t = Eigen::VectorXd::Zero(r);
       for (int k = 0; k < F; ++k) {
         const double s2 = d.variance[k].row(a).sum();
-        for (int i = 0; i < r; ++i) t(i) += s2 * b.Wy(i, k).real();  // Wy(i, k) = ξ_k^i
+        cplx v = 1;  // ξ_k^i, as BasisRow generates it
+        for (int i = 0; i < r; ++i, v *= b.xi(k)) t(i) += s2 * v.real();
       }
       for (int i = 0; i < r; ++i)
         for (int i2 = 0; i2 < r; ++i2) block(i, i2) = t(std::abs(i - i2));
@@ -387,7 +416,7 @@ Step1 step1c_whitened_svd(const Eigen::MatrixXd& CY, const Eigen::MatrixXd& R, i
 
 // Step 1 (a-c): size checks, R of Zᵀ (1a-1b), C_Y and the whitened SVD (1c).
 Step1 step1(const FrfData& d, const Bases& b, int r) {
-  step1_check_size(d, r);
+  step1_check_size(d, b, r);
   const Eigen::MatrixXd R = step1ab_qr(d, b, r);
   const int nu = r * d.inputs();
   const double r11_cond = triangular_condition(R.topLeftCorner(nu, nu));
@@ -407,26 +436,28 @@ void step3(const FrfData& d, const Bases& b, const Eigen::MatrixXd& A, const Eig
     fail(ErrorKind::Dimension, "step 3",
          "2 F c p = " + std::to_string(2LL * F * c * p) + " equations for " + std::to_string(nb + nd) +
              " unknowns of B and D");
-  // K_k = C (ξ_k I − A)⁻¹ (p × n).
-  std::vector<Eigen::MatrixXcd> K(F);
+  // K_k = C (ξ_k I − A)⁻¹ (p × n), computed as the rows are filled (a
+  // table of F of them was F small allocations). A singular ξ_k I − A leaves
+  // its rows zero and is reported, the lowest such k, after the QR.
   const Resolvent res(A, C);
-  for (int k = 0; k < F; ++k) {
-    if (!res.left(b.xi(k), K[k]))
-      fail(ErrorKind::Numerical, "step 3", "ξ_k I − A is singular at frequency index " + std::to_string(k + 1) +
-                                               " (a pole of the estimate lies on the data's frequency axis)");
-  }
+  std::atomic<int> singular{F};
   const RowFill fill = [&](int k, Eigen::Ref<Eigen::MatrixXd> rows) {
+    thread_local Eigen::MatrixXcd K;
+    rows.setZero();
+    if (!res.left(b.xi(k), K)) {
+      for (int s = singular.load(); k < s && !singular.compare_exchange_weak(s, k);) {
+      }
+      return;
+    }
     int row = 0;
     for (int j = 0; j < c; ++j)
       for (int a = 0; a < p; ++a, row += 2) {
         const double wgt = 1.0 / std::sqrt(d.variance[k](a, j));
-        rows.row(row).setZero();
-        rows.row(row + 1).setZero();
         // Coefficient of B(e, f) (column-major index e + n f): K(a, e) U(f, j).
         for (int f = 0; f < m; ++f) {
           const cplx u = d.U[k](f, j);
           for (int e = 0; e < n; ++e) {
-            const cplx v = wgt * K[k](a, e) * u;
+            const cplx v = wgt * K(a, e) * u;
             rows(row, e + n * f) = v.real();
             rows(row + 1, e + n * f) = v.imag();
           }
@@ -441,6 +472,9 @@ void step3(const FrfData& d, const Bases& b, const Eigen::MatrixXd& A, const Eig
       }
   };
   const Eigen::MatrixXd R = tsqr(F, 2 * c * p, cols, fill);
+  if (const int k = singular.load(); k < F)
+    fail(ErrorKind::Numerical, "step 3", "ξ_k I − A is singular at frequency index " + std::to_string(k + 1) +
+                                             " (a pole of the estimate lies on the data's frequency axis)");
   const Eigen::MatrixXd R1 = R.topLeftCorner(nb + nd, nb + nd);
   const Eigen::VectorXd rhs = R.topRightCorner(nb + nd, 1);
   // Rank check as in step 1b (Assumption 5 (ii): a unique minimiser).
@@ -455,13 +489,21 @@ void step3(const FrfData& d, const Bases& b, const Eigen::MatrixXd& A, const Eig
 }
 
 // Refuses an r whose bases (2 r F complex) or step 1 would be too large.
-void check_r_size(const FrfData& d, int r) {
+// Only the orthogonal bases (Algorithm 2.2, continuous or on the Tustin axis)
+// are stored; the power bases are generated where they are used.
+bool stored_bases(Domain domain, ContinuousMethod continuous, DiscreteMethod discrete) {
+  return domain == Domain::Continuous ? continuous == ContinuousMethod::Orthogonal
+                                      : discrete == DiscreteMethod::Orthogonal;
+}
+
+void check_r_size(const FrfData& d, int r, bool stored) {
   const long long cols = static_cast<long long>(r) * (d.inputs() + d.outputs());
   if (cols > kMaxColumns)
     fail(ErrorKind::Resource, "r", "r (m + p) = " + std::to_string(cols) + " exceeds the supported " +
                                        std::to_string(kMaxColumns) + " (step 1 grows as r^3)");
-  require_memory(32.0 * r * d.frequencies(), "identify-frf", "the r = " + std::to_string(r) + " bases at " +
-                                                                  std::to_string(d.frequencies()) + " frequencies");
+  if (stored)
+    require_memory(32.0 * r * d.frequencies(), "identify-frf", "the r = " + std::to_string(r) + " bases at " +
+                                                                    std::to_string(d.frequencies()) + " frequencies");
 }
 
 int check_order_r(const FrfData& d, int order, int r) {
@@ -572,29 +614,49 @@ Eigen::MatrixXcd frequency_response(const StateSpace& model, double omega) {
   return transfer(model, model.domain == Domain::Discrete ? std::polar(1.0, omega) : cplx(0.0, omega));
 }
 
+namespace {
+
+// G(ξ) = C (ξI − A)⁻¹ B + D at ω, one frequency after another, into G
+// (allocation-free once G and the work have their sizes); G is infinite where
+// ξI − A is singular.
+class ResponseAt {
+ public:
+  explicit ResponseAt(const StateSpace& model)
+      : model_(model), res_(model.A, model.C), B_(model.B.cast<cplx>()), D_(model.D.cast<cplx>()) {}
+  void operator()(double omega, Eigen::MatrixXcd& G) {
+    const cplx xi = model_.domain == Domain::Discrete ? std::polar(1.0, omega) : cplx(0.0, omega);
+    G = D_;
+    if (model_.order() == 0) return;
+    if (res_.left(xi, K_))
+      G.noalias() += K_ * B_;
+    else
+      G.setConstant(cplx(std::numeric_limits<double>::infinity(), 0.0));
+  }
+
+ private:
+  const StateSpace& model_;
+  const Resolvent res_;
+  const Eigen::MatrixXcd B_, D_;
+  Eigen::MatrixXcd K_;
+};
+
+}  // namespace
+
 std::vector<Eigen::MatrixXcd> frequency_response(const StateSpace& model, const Eigen::VectorXd& omega) {
   std::vector<Eigen::MatrixXcd> G(omega.size());
-  const Resolvent res(model.A, model.C);
-  Eigen::MatrixXcd K;
-  for (Eigen::Index k = 0; k < omega.size(); ++k) {
-    const cplx xi = model.domain == Domain::Discrete ? std::polar(1.0, omega(k)) : cplx(0.0, omega(k));
-    if (model.order() == 0) {
-      G[k] = model.D.cast<cplx>();
-    } else if (res.left(xi, K)) {
-      G[k] = K * model.B.cast<cplx>() + model.D.cast<cplx>();
-    } else {
-      G[k] = Eigen::MatrixXcd::Constant(model.outputs(), model.inputs(),
-                                        cplx(std::numeric_limits<double>::infinity(), 0.0));
-    }
-  }
+  ResponseAt response(model);
+  for (Eigen::Index k = 0; k < omega.size(); ++k) response(omega(k), G[k]);
   return G;
 }
 
 double v_sub(const StateSpace& model, const FrfData& d) {
-  const std::vector<Eigen::MatrixXcd> G = frequency_response(model, d.omega);
+  ResponseAt response(model);
+  Eigen::MatrixXcd G, e;
   double v = 0;
   for (int k = 0; k < d.frequencies(); ++k) {
-    const Eigen::MatrixXcd e = d.Y[k] - G[k] * d.U[k];
+    response(d.omega(k), G);
+    e = d.Y[k];
+    e.noalias() -= G * d.U[k];
     v += (e.cwiseAbs2().array() / d.variance[k].array()).sum();
   }
   return v;
@@ -651,7 +713,7 @@ Eigen::VectorXd frf_singular_values(const FrfData& data, int r, ContinuousMethod
                                     DiscreteMethod discrete) {
   validate(data);
   if (r < 2) fail(ErrorKind::Dimension, "r", "r must be at least 2, got " + std::to_string(r));
-  check_r_size(data, r);
+  check_r_size(data, r, stored_bases(data.domain, continuous, discrete));
   const Bases b = make_bases(data, r, continuous, omega_scale, discrete);
   return step1(data, b, r).sigma;
 }
@@ -683,7 +745,7 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
                              DiscreteMethod discrete) {
   validate(d);
   check_order_r(d, order, r);
-  check_r_size(d, r);
+  check_r_size(d, r, stored_bases(d.domain, continuous, discrete));
   const int p = d.outputs(), n = order;
   const Bases b = make_bases(d, r, continuous, omega_scale, discrete);
   const Step1 s1 = step1(d, b, r);

@@ -6,7 +6,8 @@
 namespace fdsid::numerics {
 
 /// fill(g0, g1, rows) writes the rows of groups g0 … g1−1 (rows_per_group each,
-/// group g0 first) into `rows` ((g1 − g0)·rows_per_group × cols).
+/// group g0 first) into `rows` ((g1 − g0)·rows_per_group × cols), every entry:
+/// `rows` holds the previous chunk's Householder vectors, not zeros.
 using ChunkFill = std::function<void(int g0, int g1, Eigen::Ref<Eigen::MatrixXd> rows)>;
 
 /// The chunking of streamed_qr_r: fixed by the problem's dimensions and these
