@@ -190,8 +190,8 @@ void emit_json(const std::string& path, const nlohmann::json& j) {
   if (!path.empty()) write_text_file(path, j.dump(2) + "\n");
 }
 
-void emit_plot(const std::string& path, const plot::Figure& fig) {
-  if (!path.empty()) plot::render(fig, path);
+void emit_plot(const std::string& path, const std::function<plot::Figure()>& figure) {
+  if (!path.empty()) plot::render(figure(), path);
 }
 
 std::function<void(int, int)> progress(const std::string& what) {

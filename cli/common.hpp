@@ -109,8 +109,9 @@ using fdsid::sci;  // fdsid/format.hpp: the one home of the number formats
 
 /// Writes j.dump(2) to `path` (- = stdout) when a path was given.
 void emit_json(const std::string& path, const nlohmann::json& j);
-/// Draws the figure into `path` when a path was given.
-void emit_plot(const std::string& path, const plot::Figure& fig);
+/// Builds the figure and draws it into `path` only when a path was given
+/// (at F = 10⁶ an unused figure was 240 MB of identify-frf's peak).
+void emit_plot(const std::string& path, const std::function<plot::Figure()>& figure);
 /// Progress of a long run on stderr, only when stderr is a terminal (quiet in
 /// pipes, logs and tests).
 std::function<void(int, int)> progress(const std::string& what);

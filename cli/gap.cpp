@@ -116,7 +116,7 @@ int run_gap(const GapCommand& c) {
   for (const std::string& n : r.notes) out << "note: " << n << "\n";
   if (!c.table_path.empty()) write_gap_table(c.table_path, r);
   emit_json(c.json_path, to_json(r));
-  emit_plot(c.plot_path, plot::gap_figure(r, meta.periods));
+  emit_plot(c.plot_path, [&] { return plot::gap_figure(r, meta.periods); });
   return 0;
 }
 

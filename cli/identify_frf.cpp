@@ -365,7 +365,7 @@ int run(const IdentifyFrfCommand& c) {
   if (c.refine) j["refinement"] = refinement_json(refined, ro);
   if (!stabilised.empty()) j["stabilised"] = stabilised;
   emit_json(c.json_path, j);
-  emit_plot(c.plot_path, plot::frf_figure(data, res, c.refine ? &refined.magnitude_sd : nullptr));
+  emit_plot(c.plot_path, [&] { return plot::frf_figure(data, res, c.refine ? &refined.magnitude_sd : nullptr); });
   return 0;
 }
 

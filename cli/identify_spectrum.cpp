@@ -73,7 +73,7 @@ int run(const IdentifySpectrumCommand& c) {
   if (refused_as_unusable(c.strict, res.error_estimate)) return 1;
   if (!c.refine) {
     emit_json(c.json_path, to_json(res, c.data_path));
-    emit_plot(c.plot_path, plot::spectrum_figure(data, res));
+    emit_plot(c.plot_path, [&] { return plot::spectrum_figure(data, res); });
     return 0;
   }
   SpectrumRefineResult refined;
@@ -94,7 +94,7 @@ int run(const IdentifySpectrumCommand& c) {
   nlohmann::json j = to_json(shown, c.data_path);
   j["refinement"] = refinement_json(refined, res);
   emit_json(c.json_path, j);
-  emit_plot(c.plot_path, plot::spectrum_figure(data, shown));
+  emit_plot(c.plot_path, [&] { return plot::spectrum_figure(data, shown); });
   return 0;
 }
 

@@ -46,7 +46,7 @@ int run_table1(const Table1Command& c) {
   }
   out << "sigma5 of Van Overschee's matrix collapses geometrically with M; the 2n = 8 singular values of Y do not.\n";
   emit_json(c.json_path, to_json(rows));
-  emit_plot(c.plot_path, plot::table1_figure(rows));
+  emit_plot(c.plot_path, [&] { return plot::table1_figure(rows); });
   return 0;
 }
 
@@ -79,7 +79,7 @@ int run_table2(Table2Command c) {
     }
   }
   emit_json(c.json_path, to_json(rows, o));
-  emit_plot(c.plot_path, plot::table2_figure(rows, o));
+  emit_plot(c.plot_path, [&] { return plot::table2_figure(rows, o); });
   return 0;
 }
 
@@ -98,7 +98,7 @@ int run_figure(FigureCommand c) {
       << "; bound sqrt((M-2)/(M-3)) = " << res.bound << "\n";
   out << "Monte Carlo standard error of one ratio <= " << std_ratio_standard_error(res.runs) << "\n";
   emit_json(c.json_path, to_json(res, c.figure, o));
-  emit_plot(c.plot_path, plot::std_ratio_figure(res, c.figure, o));
+  emit_plot(c.plot_path, [&] { return plot::std_ratio_figure(res, c.figure, o); });
   return 0;
 }
 

@@ -386,6 +386,13 @@ TEST_F(CliFrf, RepeatedFrequency) {
   // Row 2 (file line 3) repeats row 1 (file line 2): both file lines named.
   EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f, "--order", "1"}),
                          {f + " line 3 column omega", "repeats " + f + " line 2"}));
+  // Out of order, two repeated frequencies and a blank line: the first repeat
+  // in file order is named (line 6 repeats line 3; line 7 repeats line 2),
+  // with file lines, not row numbers.
+  const std::string g = write("rep2.csv", "omega,G_re,G_im,G_var\n0.3,1,0,1e-6\n0.1,1,0,1e-6\n\n0.2,1,0,1e-6\n"
+                                          "0.1,1,0,1e-6\n0.3,1,0,1e-6\n0.4,1,0,1e-6\n");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", g, "--order", "1"}),
+                         {g + " line 6 column omega", "omega = 0.1", "repeats " + g + " line 3"}));
 }
 
 TEST_F(CliFrf, DiscreteOmegaAbovePi) {
@@ -1241,8 +1248,12 @@ TEST_F(CliFrf, AnUnusableEstimateIsSaidAndStrictRefusesIt) {
     const RunResult s = run_fdsid({"identify-frf", "--frf", d, "--order", "6", "--r", r_value, "--strict", "--json",
                                    strict_path});
     EXPECT_NE(s.status, 0) << describe(s);
-    if (r.status == 0) EXPECT_EQ(s.status, 1) << describe(s);
-    if (s.status == 1) EXPECT_NE(s.err.find("--strict: the estimate is unusable"), std::string::npos) << s.err;
+    if (r.status == 0) {
+      EXPECT_EQ(s.status, 1) << describe(s);
+    }
+    if (s.status == 1) {
+      EXPECT_NE(s.err.find("--strict: the estimate is unusable"), std::string::npos) << s.err;
+    }
     EXPECT_FALSE(fs::exists(strict_path));
   }
   // The warning path itself must be exercised: all three refusing would leave

@@ -40,8 +40,10 @@ struct FrfData {
 
 /// FRF data G(ξ_k) (p × m each) with the variance of each entry: U[k] = I_m.
 /// An empty `variance` means unit weights (has_noise_model = false).
-FrfData frf_data(Domain domain, const Eigen::VectorXd& omega, const std::vector<Eigen::MatrixXcd>& G,
-                 const std::vector<Eigen::MatrixXd>& variance = {});
+/// G and variance are taken by value: pass them with std::move where they are
+/// not needed after (a file of 10⁶ lines held them twice).
+FrfData frf_data(Domain domain, const Eigen::VectorXd& omega, std::vector<Eigen::MatrixXcd> G,
+                 std::vector<Eigen::MatrixXd> variance = {});
 
 /// Checks shapes, finiteness, positive variances, distinct frequencies in range
 /// (discrete: 0 ≤ ω ≤ π; continuous: ω > 0). Throws Error(Input) or Error(Grid)
@@ -187,6 +189,11 @@ Eigen::MatrixXcd frequency_response(const StateSpace& model, double omega);
 /// backward-stable solve), else by one LU per frequency. A frequency on a
 /// pole gives Inf entries.
 std::vector<Eigen::MatrixXcd> frequency_response(const StateSpace& model, const Eigen::VectorXd& omega);
+
+/// One entry G_{output,input}(ω_k) at every ω_k, the same values as the
+/// matrices above, into one vector (a Monte Carlo loop's SISO curves, without
+/// F small matrices per call).
+Eigen::VectorXcd frequency_response(const StateSpace& model, const Eigen::VectorXd& omega, int output, int input);
 
 /// The warning for an unstable model, or "": a pole of modulus >= 1
 /// (discrete) or real part >= 0 (continuous); the worst one is named.
