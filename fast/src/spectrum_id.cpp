@@ -6,6 +6,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <thread>
 #include <utility>
 
 #include "fdsid/compare.hpp"
@@ -582,9 +583,10 @@ StableRealization step7_A_C(const Split& sp, const Eigen::MatrixXd& U2n, int m, 
 // Ŝ = Ê + X + X^H, X = Ĉ (zI - Â)^{-1} F̂; writes Ê and F̂ into s.
 // Method: the real design of SummandDesign, one group of rows per grid
 // sample, reduced to R of the augmented design [Φ | y] by the streamed QR
-// (numerics/qr.hpp): one block (the fill walks the grid per chunk) and 1024
-// rows per chunk, the chunking this step has always used; θ by back
-// substitution.
+// (numerics/qr.hpp): 1024 rows per chunk, the fill walking the grid per chunk;
+// blocks by its default work rule (≥ 2^24 flops each, fixed by M and q, so the
+// result does not depend on the core count), which splits M = 10⁶ over both
+// cores of a 2-core machine; θ by back substitution.
 // Numerical aspects: the condition of Φ is not squared (no normal equations).
 // The rank test is numerics/rank.hpp's with size factor 10 (floor
 // 1e3·u·max|r_ii|, the value this step has always used). The √rows factor of
@@ -596,14 +598,14 @@ StableRealization step7_A_C(const Split& sp, const Eigen::MatrixXd& U2n, int m, 
 // References: Akçay (2011) Algorithm 1 step 8.
 Eigen::VectorXd step8_least_squares_EF(const SpectrumData& data, const StableRealization& sr, SpectralSummands& s) {
   const int m = data.m, M = data.M, n = static_cast<int>(sr.A.rows());
-  SummandDesign design(sr.C, sr.blocks, m);
-  const int q = design.unknowns(), rps = design.rows_per_sample();
+  SummandDesign shape(sr.C, sr.blocks, m);
+  const int q = shape.unknowns(), rps = shape.rows_per_sample();
   if (static_cast<long long>(M + 1) * rps < q)
     throw Error(ErrorKind::Dimension, "step 8", "fewer equations than unknowns in the E, F fit");
   numerics::StreamedQrOptions qr_options;
   qr_options.rows_per_chunk = 1024;
-  qr_options.flops_per_block = 0;
   const numerics::ChunkFill fill = [&](int k0, int k1, Eigen::Ref<Eigen::MatrixXd> rows) {
+    SummandDesign design(sr.C, sr.blocks, m);  // its own work space: blocks of the QR may run on threads
     Eigen::VectorXd y(rps);
     GridWalker grid(k0, M);
     for (int j = 0; j < k1 - k0; ++j, grid.next()) {
@@ -625,7 +627,7 @@ Eigen::VectorXd step8_least_squares_EF(const SpectrumData& data, const StableRea
   s.F = Eigen::Map<const Eigen::MatrixXd>(theta.data(), n, m);
   s.E.resize(m, m);
   for (int a = 0; a < m; ++a)
-    for (int b = a; b < m; ++b) s.E(a, b) = s.E(b, a) = theta(n * m + design.e_position(a, b));
+    for (int b = a; b < m; ++b) s.E(a, b) = s.E(b, a) = theta(n * m + shape.e_position(a, b));
   return theta;
 }
 
@@ -637,28 +639,43 @@ Eigen::VectorXd step8_least_squares_EF(const SpectrumData& data, const StableRea
 // Fails: Error(Positivity) when the minimum is not positive, naming ω.
 // References: Akçay (2011) Algorithm 1 step 8.
 double step8_fitted_spectrum_minimum(const StableRealization& sr, const Eigen::VectorXd& theta, int m, int M) {
-  SummandDesign design(sr.C, sr.blocks, m);
-  const int q = design.unknowns(), rps = design.rows_per_sample();
-  Eigen::MatrixXd D(rps, q);
-  Eigen::VectorXd values(rps);
-  double worst = std::numeric_limits<double>::infinity();
-  int worst_k = 0;
-  GridWalker grid(0, M);
-  for (int k = 0; k <= M; ++k, grid.next()) {
-    double v;
-    if (m == 1) {
-      design.scalar_row(grid.z(), D.data(), 1);
-      v = D.row(0).dot(theta);
-    } else {
-      design.rows(grid.z(), nullptr, k, D, values);
-      values.noalias() = D * theta;
-      v = min_hermitian_eigenvalue(unpack_hermitian(values, m));
+  // The smallest value over samples k0 … k1−1, and where (the first k on a tie).
+  const auto range_minimum = [&](int k0, int k1) {
+    SummandDesign design(sr.C, sr.blocks, m);
+    const int q = design.unknowns(), rps = design.rows_per_sample();
+    Eigen::MatrixXd D(rps, q);
+    Eigen::VectorXd values(rps);
+    std::pair<double, int> best{std::numeric_limits<double>::infinity(), k0};
+    GridWalker grid(k0, M);
+    for (int k = k0; k < k1; ++k, grid.next()) {
+      double v;
+      if (m == 1) {
+        design.scalar_row(grid.z(), D.data(), 1);
+        v = D.row(0).dot(theta);
+      } else {
+        design.rows(grid.z(), nullptr, k, D, values);
+        values.noalias() = D * theta;
+        v = min_hermitian_eigenvalue(unpack_hermitian(values, m));
+      }
+      if (v < best.first) best = {v, k};
     }
-    if (v < worst) {
-      worst = v;
-      worst_k = k;
-    }
+    return best;
+  };
+  // Two halves on two threads above 2^16 samples. The second half starts at
+  // a multiple of 64, where GridWalker re-anchors anyway, so every z_k (hence
+  // every value) is the one a single walk from k = 0 computes; the minimum is
+  // exact and ties go to the first k: the result does not depend on the split
+  // or the core count.
+  std::pair<double, int> lo, hi{std::numeric_limits<double>::infinity(), M + 1};
+  if (M + 1 >= (1 << 16) && std::thread::hardware_concurrency() > 1) {
+    const int mid = ((M + 1) / 2) & ~63;
+    std::thread t([&] { hi = range_minimum(mid, M + 1); });
+    lo = range_minimum(0, mid);
+    t.join();
+  } else {
+    lo = range_minimum(0, M + 1);
   }
+  const auto [worst, worst_k] = hi.first < lo.first ? hi : lo;
   if (!(worst > 0.0))
     throw Error(ErrorKind::Positivity, "step 8",
                 "estimated spectrum is not positive on the grid: smallest eigenvalue " + fmt(worst, 4) +
