@@ -332,11 +332,13 @@ void figure_run(const FigureOptions& o, const FigureSetup& su, int i, std::vecto
       U_l[l][k](0) = su.U(k);
       Y_l[l][k](0) = su.G0(k) * su.U(k) + sd * cplx(re, im);
     }
-  const SampleStatistics st = sample_statistics(Domain::Discrete, su.omega, U_l, Y_l);
-  FrfData known = st.data;
-  for (int k = 0; k < F; ++k) known.variance[k](0, 0) = su.sigma2(k) / o.M;
+  SampleStatistics st = sample_statistics(Domain::Discrete, su.omega, U_l, Y_l);
   try {
     const StateSpace eS = identify_frf_fixed(st.data, o.order, o.r).model;
+    // The same Ŷ with the true σ²/M in place of the sample variance (no copy
+    // of the data: F small matrices per run).
+    FrfData& known = st.data;
+    for (int k = 0; k < F; ++k) known.variance[k](0, 0) = su.sigma2(k) / o.M;
     const StateSpace eT = identify_frf_fixed(known, o.order, o.r).model;
     const StateSpace eK = o.order == su.plant.order() ? fit_input_matrices(known, su.plant.A, su.plant.C)
                                                       : fit_input_matrices(known, eT.A, eT.C);
