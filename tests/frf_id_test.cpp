@@ -447,6 +447,51 @@ TEST(FrfAutomatic, OrderFromNoisyDataAtModerateSnr) {
   }
 }
 
+// identify_frf_fixed over several noise models of the same measurements
+// (issue 16: one QR of step 1b shared by the estimates of a Monte Carlo run)
+// gives, bit for bit, what one call per noise model gives — in the monomial
+// and in an orthogonal basis — and refuses data that differ in more than the
+// variances.
+TEST(FrfNoiseModels, SharedStepOneEqualsSeparateCallsBitForBit) {
+  std::mt19937_64 rng(16);
+  const StateSpace sys = eq36();
+  const Eigen::VectorXd w = random_grid(rng, 200, 0.0, M_PI);
+  std::vector<Eigen::MatrixXcd> G;
+  std::vector<Eigen::MatrixXd> V1, V2;
+  for (int k = 0; k < w.size(); ++k) {
+    const Eigen::MatrixXcd g0 = frequency_response(sys, w(k));
+    G.push_back(g0 + Eigen::MatrixXcd::Constant(1, 1, complex_normal(rng, 1e-4)));
+    V1.push_back(Eigen::MatrixXd::Constant(1, 1, 1e-4));
+    V2.push_back(Eigen::MatrixXd::Constant(1, 1, 1e-4 * (1 + 0.5 * std::sin(3 * w(k)))));
+  }
+  const std::vector<FrfData> models{frf_data(Domain::Discrete, w, G, V1), frf_data(Domain::Discrete, w, G, V2)};
+  for (DiscreteMethod method : {DiscreteMethod::Monomial, DiscreteMethod::Orthogonal}) {
+    SCOPED_TRACE(to_string(method));
+    const std::vector<FrfResult> shared = identify_frf_fixed(models, 4, 10, ContinuousMethod::Bilinear, 0, method);
+    ASSERT_EQ(shared.size(), 2u);
+    for (int v = 0; v < 2; ++v) {
+      const FrfResult one = identify_frf_fixed(models[v], 4, 10, ContinuousMethod::Bilinear, 0, method);
+      EXPECT_TRUE((shared[v].model.A.array() == one.model.A.array()).all()) << v;
+      EXPECT_TRUE((shared[v].model.B.array() == one.model.B.array()).all()) << v;
+      EXPECT_TRUE((shared[v].model.C.array() == one.model.C.array()).all()) << v;
+      EXPECT_TRUE((shared[v].model.D.array() == one.model.D.array()).all()) << v;
+      EXPECT_TRUE((shared[v].singular_values.array() == one.singular_values.array()).all()) << v;
+      EXPECT_EQ(shared[v].v_sub, one.v_sub) << v;
+    }
+    // The two noise models weight differently: the estimates differ.
+    EXPECT_FALSE((shared[0].model.B.array() == shared[1].model.B.array()).all());
+  }
+  std::vector<FrfData> other = models;
+  other[1].Y[7](0, 0) += 1e-3;
+  try {
+    identify_frf_fixed(other, 4, 10);
+    ADD_FAILURE() << "data differing in Y were accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Input);
+    EXPECT_NE(std::string(e.what()).find("more than the variances"), std::string::npos) << e.what();
+  }
+}
+
 TEST(FrfAutomatic, RSelectionScansTheSectionFiveIntervalAndTakesTheMinimum) {
   std::mt19937_64 rng(8);
   const StateSpace sys = eq36();

@@ -425,15 +425,19 @@ Step1 step1c_whitened_svd(const Eigen::MatrixXd& CY, const Eigen::MatrixXd& R, i
   return s;
 }
 
-// Step 1 (a-c): size checks, R of Zᵀ (1a-1b), C_Y and the whitened SVD (1c).
-Step1 step1(const FrfData& d, const Bases& b, int r) {
-  step1_check_size(d, b, r);
-  const Eigen::MatrixXd R = step1ab_qr(d, b, r);
+// Step 1c on R of step 1b: C_Y of d's variances and the whitened SVD.
+Step1 step1c(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, int r) {
   const int nu = r * d.inputs();
   const double r11_cond = triangular_condition(R.topLeftCorner(nu, nu));
   Step1 s = step1c_whitened_svd(step1c_noise_covariance(d, b, r), R, r, d, b);
   s.r11_condition = r11_cond;
   return s;
+}
+
+// Step 1 (a-c): size checks, R of Zᵀ (1a-1b), C_Y and the whitened SVD (1c).
+Step1 step1(const FrfData& d, const Bases& b, int r) {
+  step1_check_size(d, b, r);
+  return step1c(d, b, step1ab_qr(d, b, r), r);
 }
 
 // Step 3, Eq. (17): (B, D) minimising Σ |Y − (C(ξI − A)⁻¹B + D)U|² / σ²
@@ -771,14 +775,13 @@ std::string instability_warning(Domain domain, const Eigen::VectorXcd& poles) {
          "; it fits the data's frequency response but must not be simulated: try another --order or --r";
 }
 
-FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMethod continuous, double omega_scale,
-                             DiscreteMethod discrete) {
-  validate(d);
-  check_order_r(d, order, r);
-  check_r_size(d, r, stored_bases(d.domain, continuous, discrete));
+namespace {
+
+// identify_frf_fixed from step 1c on: the estimate of order n from R of step
+// 1b and d's variances.
+FrfResult estimate_from_r(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, int order, int r) {
   const int p = d.outputs(), n = order;
-  const Bases b = make_bases(d, r, continuous, omega_scale, discrete);
-  const Step1 s1 = step1(d, b, r);
+  const Step1 s1 = step1c(d, b, R, r);
   if (!(s1.sigma(n - 1) > 0))
     fail(ErrorKind::Order, "step 1c", "singular value " + std::to_string(n) + " is zero: the data hold no order-" +
                                           std::to_string(n) + " model");
@@ -865,6 +868,45 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
       out_of_band_warning(resonances_outside_band(res.poles, est.domain, lo, hi), est.domain, lo, hi, "the data's frequencies");
   if (!outside.empty()) res.warnings.push_back(outside);
   return res;
+}
+
+}  // namespace
+
+FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMethod continuous, double omega_scale,
+                             DiscreteMethod discrete) {
+  validate(d);
+  check_order_r(d, order, r);
+  check_r_size(d, r, stored_bases(d.domain, continuous, discrete));
+  const Bases b = make_bases(d, r, continuous, omega_scale, discrete);
+  step1_check_size(d, b, r);
+  return estimate_from_r(d, b, step1ab_qr(d, b, r), order, r);
+}
+
+std::vector<FrfResult> identify_frf_fixed(const std::vector<FrfData>& data, int order, int r,
+                                          ContinuousMethod continuous, double omega_scale, DiscreteMethod discrete) {
+  if (data.empty()) return {};
+  const FrfData& d0 = data[0];
+  for (size_t v = 0; v < data.size(); ++v) {
+    const FrfData& d = data[v];
+    validate(d, "noise model " + std::to_string(v + 1));
+    bool same = d.domain == d0.domain && d.sample_time == d0.sample_time && d.omega.size() == d0.omega.size() &&
+                d.omega == d0.omega && d.U.size() == d0.U.size() && d.Y.size() == d0.Y.size();
+    for (size_t k = 0; same && k < d.U.size(); ++k)
+      same = d.U[k].rows() == d0.U[k].rows() && d.U[k].cols() == d0.U[k].cols() && d.U[k] == d0.U[k] &&
+             d.Y[k].rows() == d0.Y[k].rows() && d.Y[k].cols() == d0.Y[k].cols() && d.Y[k] == d0.Y[k];
+    if (!same)
+      fail(ErrorKind::Input, "noise model " + std::to_string(v + 1),
+           "differs from noise model 1 in more than the variances (U, Y, omega, domain or sample time)");
+  }
+  check_order_r(d0, order, r);
+  check_r_size(d0, r, stored_bases(d0.domain, continuous, discrete));
+  const Bases b = make_bases(d0, r, continuous, omega_scale, discrete);
+  step1_check_size(d0, b, r);
+  const Eigen::MatrixXd R = step1ab_qr(d0, b, r);
+  std::vector<FrfResult> out;
+  out.reserve(data.size());
+  for (const FrfData& d : data) out.push_back(estimate_from_r(d, b, R, order, r));
+  return out;
 }
 
 namespace {

@@ -334,12 +334,17 @@ void figure_run(const FigureOptions& o, const FigureSetup& su, int i, std::vecto
     }
   SampleStatistics st = sample_statistics(Domain::Discrete, su.omega, U_l, Y_l);
   try {
-    const StateSpace eS = identify_frf_fixed(st.data, o.order, o.r).model;
-    // The same Ŷ with the true σ²/M in place of the sample variance (no copy
-    // of the data: F small matrices per run).
-    FrfData& known = st.data;
-    for (int k = 0; k < F; ++k) known.variance[k](0, 0) = su.sigma2(k) / o.M;
-    const StateSpace eT = identify_frf_fixed(known, o.order, o.r).model;
+    // The sample variances and the same Û, Ŷ with the true σ²/M: one QR of
+    // step 1b for both (identify_frf_fixed over noise models).
+    std::vector<FrfData> models;
+    models.reserve(2);
+    models.push_back(st.data);
+    models.push_back(std::move(st.data));
+    for (int k = 0; k < F; ++k) models[1].variance[k](0, 0) = su.sigma2(k) / o.M;
+    const std::vector<FrfResult> both = identify_frf_fixed(models, o.order, o.r);
+    const StateSpace& eS = both[0].model;
+    const StateSpace& eT = both[1].model;
+    const FrfData& known = models[1];
     const StateSpace eK = o.order == su.plant.order() ? fit_input_matrices(known, su.plant.A, su.plant.C)
                                                       : fit_input_matrices(known, eT.A, eT.C);
     Eigen::VectorXcd g[3];

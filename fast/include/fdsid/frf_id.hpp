@@ -155,6 +155,17 @@ FrfResult identify_frf_fixed(const FrfData& data, int order, int r,
                              ContinuousMethod continuous = ContinuousMethod::Bilinear, double omega_scale = 0,
                              DiscreteMethod discrete = DiscreteMethod::Monomial);
 
+/// identify_frf_fixed for several noise models of the same measurements:
+/// data[v] differ only in `variance` (U, Y, ω, domain and sample time must be
+/// equal; Error(Input) otherwise). Step 1b's QR of Zᵀ does not involve the
+/// variances, so it is computed once; C_Y, the SVD of step 1c, steps 2 and 3
+/// run per noise model. Result v is bit for bit identify_frf_fixed(data[v], …)
+/// (Pintelon 2002 Section 6.1 compares the sample-variance and the
+/// known-variance estimates of one run this way).
+std::vector<FrfResult> identify_frf_fixed(const std::vector<FrfData>& data, int order, int r,
+                                          ContinuousMethod continuous = ContinuousMethod::Bilinear,
+                                          double omega_scale = 0, DiscreteMethod discrete = DiscreteMethod::Monomial);
+
 /// Identification with the choices of Section 5: the order from the singular
 /// values of step 1c (when options.order == 0) and r minimising V_SUB (Eq. 35)
 /// over [1.5 n_a, 6 n_a] (when options.r == 0). The order rule: with a noise
