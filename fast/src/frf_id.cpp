@@ -138,14 +138,14 @@ double default_scale(const FrfData& d) {
 class BasisRow {
  public:
   BasisRow(const Bases& b, Eigen::Index k0, Eigen::Index n) : b_(b), k0_(k0), u_(n), y_(n) { load(); }
-  void next() {
-    ++i_;
-    load();
+  void next() {  // past the last row (i = r) nothing is loaded: the caller's loop has ended
+    if (++i_ < rows()) load();
   }
   const Eigen::VectorXcd& u() const { return u_; }
   const Eigen::VectorXcd& y() const { return b_.orthogonal ? y_ : u_; }
 
  private:
+  int rows() const { return b_.orthogonal ? static_cast<int>(b_.Wu.rows()) : std::numeric_limits<int>::max(); }
   void load() {
     const Eigen::Index n = u_.size();
     if (b_.orthogonal) {
