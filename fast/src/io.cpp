@@ -485,7 +485,7 @@ FrfData parse_frf(std::istream& in, const std::string& name, Domain domain, cons
   // usual file) repeat nothing; otherwise rows sorted by (omega, line): the
   // second row of each run of equal omegas repeats the run's first, and the
   // smallest such line is reported.
-  if (!std::is_sorted(omega.begin(), omega.end(), std::less_equal<double>())) {
+  if (std::adjacent_find(omega.begin(), omega.end(), std::greater_equal<double>()) != omega.end()) {
     std::vector<int> order(omega.size());
     for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
     std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return omega[a] < omega[b]; });
