@@ -11,6 +11,7 @@
 
 #include "fdsid/compare.hpp"
 #include "fdsid/error.hpp"
+#include "numerics/complex.hpp"
 #include "numerics/constants.hpp"
 #include "numerics/fft.hpp"
 #include "fdsid/format.hpp"
@@ -35,12 +36,9 @@ struct Block {
   double a, b;
 };
 
-// 1/w without the overflow-guarded library division: |w| is bounded away from 0
-// and infinity here (|z| = 1, |λ| < 1), so conj(w)/|w|^2 is accurate to a few u.
-inline cplx reciprocal(cplx w) {
-  const double d = w.real() * w.real() + w.imag() * w.imag();
-  return cplx(w.real() / d, -w.imag() / d);
-}
+// 1/w: numerics::reciprocal; |w| is bounded away from 0 and infinity here
+// (|z| = 1, |λ| < 1).
+using numerics::reciprocal;
 
 // χ(z) = Ĉ (zI - Â)^{-1} for block-diagonal Â, written into chi (m x n).
 // 2x2 block: (zI - [[a,b],[-b,a]])^{-1} = [[z-a, b], [-b, z-a]] / ((z-a)^2 + b^2).
