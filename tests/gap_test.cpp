@@ -225,6 +225,56 @@ TEST(GapDiagnosis, CubicOutputNonlinearitySeenOnUnexcitedLines) {
   EXPECT_LT(r.gap_after, 2.0);
 }
 
+// Issue 17, item 3(a): a cubic spring fed back through a lightly damped
+// structure (Duffing type): x(t+1) = A x + B (u − k₃ y³), y = C x, D = 0, in
+// periodic steady state, the measured y with white noise of std 0.01 (about
+// 3 % of its rms, 0.33). The model is the linear structure itself. The level-
+// dependent resonance shift and the distortion on the unexcited lines are
+// one effect: the in-loop polynomial, alone — no mode_mismatch or
+// unmodelled_mode beside it — and what remains is noise.
+TEST(GapDiagnosis, CubicFeedbackThroughTheStructureIsOneInLoopNonlinearity) {
+  StateSpace g;
+  g.domain = Domain::Discrete;
+  g.sample_time = 1;
+  const double th = 2 * M_PI * 0.05, rho = std::exp(-0.05 * th);  // 0.05 cycles/sample, damping ratio 0.05
+  g.A.resize(2, 2);
+  g.A << rho * std::cos(th), rho * std::sin(th), -rho * std::sin(th), rho * std::cos(th);
+  g.B = Eigen::Vector2d(0.05, 0);
+  g.C = Eigen::RowVector2d(0, 1);
+  g.D = Eigen::MatrixXd::Zero(1, 1);
+  const double k3 = 0.5;
+  RecordMeta meta;
+  const Eigen::MatrixXd lin = simulate_periodic_record(g, options(12, 0.0), meta);
+  // Steady state: 40 periods of the (periodic) input first; the slowest decay
+  // of the linear part is rho^P = e^{-0.05·2π·0.05·512} ≈ 3e-4 per period.
+  Eigen::Vector2d x = Eigen::Vector2d::Zero();
+  auto step = [&](double u) {
+    const double y = (g.C * x)(0);
+    x = g.A * x + g.B * (u - k3 * y * y * y);
+    return y;
+  };
+  for (int rep = 0; rep < 40; ++rep)
+    for (int t = 0; t < kP; ++t) step(lin(t, 0));
+  const Eigen::MatrixXd rec = with_output(lin, 12, [&](double u, double) { return step(u); });
+  const GapReport r = diagnose_gap(g, rec, 1, meta);
+  SCOPED_TRACE(verdict(r));
+  EXPECT_EQ(names(r.present), std::vector<std::string>{"nonlinearity"});
+  EXPECT_EQ(param(r, "nonlinearity", "in_loop"), 1.0);
+  EXPECT_LT(r.p_nonlinearity, r.options.alpha);
+  EXPECT_EQ(to_string(r.verdict), std::string("explained"));
+  EXPECT_LT(r.gap_after, 2.0);
+  // The coefficients against the truth (a₁ = a₂ = 0, a₃ = k₃): a Monte Carlo
+  // over 30 seeds (100 … 129) of this very case gave a₃ mean 0.5005, sd
+  // 0.0084 and a₁ mean −0.0002, sd 0.0021 (no visible bias from the noise in
+  // the fed-back output); limits 5 sd (0.042, 0.011): a false failure below
+  // 1e-6 for a normal estimate, leaving room for the sd's own ~13 % sampling
+  // error. The same runs: every one chose the in-loop nonlinearity alone,
+  // gap_after ≤ 1.66; one of 30 read "unexplained" (what remained failed the
+  // gap test at 0.01: the test's level).
+  EXPECT_NEAR(param(r, "nonlinearity", "a3"), k3, 0.042);
+  EXPECT_NEAR(param(r, "nonlinearity", "a1"), 0.0, 0.011);
+}
+
 TEST(GapDiagnosis, TransientFromRestIsLeakage) {
   // The plant driven from rest: the record's first period carries the transient
   // (poles of modulus ≤ 0.954: 0.954^512 ≈ 4e-11 of it is left after one period).

@@ -80,7 +80,10 @@ std::vector<std::pair<std::string, double>> parameter_list(const EffectParameter
     }
     List operator()(const Nonlinearity& p) const {
       if (!p.fitted) return {};
-      return {{"a2", p.a2}, {"a3", p.a3}, {"at_input", f(p.at_input)}};
+      List l;
+      if (p.in_loop) l.emplace_back("a1", p.a1);
+      l.insert(l.end(), {{"a2", p.a2}, {"a3", p.a3}, {"at_input", f(p.at_input)}, {"in_loop", f(p.in_loop)}});
+      return l;
     }
     List operator()(const Leakage& p) const {
       return {{"transient_periods", static_cast<double>(p.transient_periods)}};
@@ -131,6 +134,7 @@ struct Spectra {
   Eigen::VectorXd cycles;    // k / P, cycles/sample
   std::vector<int> exc, ne, all;  // excited; unexcited inside the excited band; 1 … P/2
   Eigen::MatrixXd u_time;    // P × M input samples (for the input polynomial)
+  Eigen::MatrixXd y_time;    // P × M output samples (for the in-loop polynomial)
 };
 
 // The unitary DFT of one period (Eq. 4) and the optimisers: numerics/.
@@ -753,9 +757,23 @@ class Diagnosis {
     return best;
   }
 
-  // Static polynomial a₂ x² + a₃ x³ at the output (x the linear prediction) or
-  // at the input (G · DFT(u², u³)), fitted on the excited and the unexcited
-  // lines by weighted least squares; the better of the two.
+  // Nonlinear distortion, three forms, fitted on the excited and the
+  // unexcited lines by weighted least squares; the one with the lowest
+  // Schwarz score V + penalty · dof wins:
+  //  - a static polynomial a₂ x² + a₃ x³ at the output (x the linear
+  //    prediction G u of each period), 2 parameters;
+  //  - the same at the input (G · DFT(u², u³)), 2 parameters;
+  //  - in the loop: the measured output fed back through the model,
+  //    y = G (u − a₁ y − a₂ y² − a₃ y³) (a Duffing-type stiffness, the
+  //    Silverbox's and the cubic-feedback circuit's structure), so that
+  //    Y − G U = −G · DFT(a₁ y + a₂ y² + a₃ y³), 3 parameters. a₁ carries the
+  //    level dependence of a model that is itself a linearisation (a best
+  //    linear approximation at another level: the cubic's linear share).
+  //    y is the mean period of the used periods (time domain), so the term
+  //    is the same in every period and the noise floor s² is untouched; the
+  //    mean still carries noise (errors in the regressor), which biases the
+  //    coefficients by O(noise variance / signal power), negligible at the
+  //    signal-to-noise ratios where a distortion is detectable at all.
   Trial fit_nonlinearity(const Augment& a0) const {
     Augment a = a0;
     a.nl.resize(0, 0);
@@ -766,36 +784,58 @@ class Diagnosis {
     lines.insert(lines.end(), s_.ne.begin(), s_.ne.end());
     const LineStats st = line_stats(s_, a, lines);
     Trial best{a, {0, 0, 2, 1, Nonlinearity{}}, std::numeric_limits<double>::infinity()};
-    for (int where = 0; where < 2; ++where) {  // 0 output, 1 input
-      std::array<Eigen::MatrixXcd, 2> Q = {Eigen::MatrixXcd::Zero(s_.M, L), Eigen::MatrixXcd::Zero(s_.M, L)};
+    double best_score = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd y_mean = Eigen::VectorXd::Zero(s_.P);
+    for (int l = a.first; l < s_.M; ++l) y_mean += s_.y_time.col(l);
+    y_mean /= static_cast<double>(s_.M - a.first);
+    enum Form { Output, Input, InLoop };
+    for (Form form : {Output, Input, InLoop}) {
+      const std::vector<int> degrees = form == InLoop ? std::vector<int>{1, 2, 3} : std::vector<int>{2, 3};
+      const int q = static_cast<int>(degrees.size());
+      std::vector<Eigen::MatrixXcd> Q(q, Eigen::MatrixXcd::Zero(s_.M, L));
       double scale = 0;
       for (int l = a.first; l < s_.M; ++l) {
-        const Eigen::VectorXd x =
-            where == 0 ? fft.inverse(G.cwiseProduct(s_.U.row(l).transpose())) : Eigen::VectorXd(s_.u_time.col(l));
+        if (form == InLoop && l > a.first) {  // the same term in every period
+          for (int d = 0; d < q; ++d) Q[d].row(l) = Q[d].row(a.first);
+          continue;
+        }
+        const Eigen::VectorXd x = form == Output ? fft.inverse(G.cwiseProduct(s_.U.row(l).transpose()))
+                                  : form == Input ? Eigen::VectorXd(s_.u_time.col(l))
+                                                  : y_mean;
         scale = std::max(scale, x.cwiseAbs().maxCoeff());
-        for (int d = 0; d < 2; ++d) {
-          Eigen::VectorXcd F = fft.forward(x.array().pow(d + 2).matrix());
-          if (where == 1) F = F.cwiseProduct(G);
+        for (int d = 0; d < q; ++d) {
+          Eigen::VectorXcd F = fft.forward(x.array().pow(degrees[d]).matrix());
+          if (form == Input) F = F.cwiseProduct(G);
+          if (form == InLoop) F = -F.cwiseProduct(G);
           Q[d].row(l) = F.transpose();
         }
       }
       if (!(scale > 0)) continue;
       const int K = static_cast<int>(lines.size());
-      std::vector<Eigen::VectorXcd> Phi(2, Eigen::VectorXcd(K));
+      std::vector<Eigen::VectorXcd> Phi(q, Eigen::VectorXcd(K));
       Eigen::VectorXd w(K);
       for (int i = 0; i < K; ++i) {
-        for (int d = 0; d < 2; ++d)
-          Phi[d](i) = Q[d].col(lines[i]).segment(a.first, s_.M - a.first).mean() / std::pow(scale, d + 2);
+        for (int d = 0; d < q; ++d)
+          Phi[d](i) = Q[d].col(lines[i]).segment(a.first, s_.M - a.first).mean() / std::pow(scale, degrees[d]);
         w(i) = st.var(i);
       }
       w = pooled(w).cwiseInverse() * st.M;  // excited then unexcited lines: pooled within each run
       Eigen::VectorXd c;
       weighted_ls(Phi, st.mean, w, c);
-      const double a2 = c(0) / std::pow(scale, 2), a3 = c(1) / std::pow(scale, 3);
-      Trial t{a, {0, 0, 2, 1, Nonlinearity{true, a2, a3, where == 1}}, 0};
-      t.state.nl = a2 * Q[0] + a3 * Q[1];
+      Nonlinearity p{true, 0, 0, form == Input, form == InLoop, 0};
+      Trial t{a, {0, 0, q, 1, p}, 0};
+      t.state.nl = Eigen::MatrixXcd::Zero(s_.M, L);
+      for (int d = 0; d < q; ++d) {
+        const double coef = c(d) / std::pow(scale, degrees[d]);
+        (degrees[d] == 1 ? p.a1 : degrees[d] == 2 ? p.a2 : p.a3) = coef;
+        t.state.nl += coef * Q[d];
+      }
+      t.fit.parameters = p;
       t.V = line_stats(s_, t.state, s_.exc).pooled_cost;
-      if (t.V < best.V) best = t;
+      if (t.V + penalty_ * q < best_score) {
+        best_score = t.V + penalty_ * q;
+        best = t;
+      }
     }
     if (!std::isfinite(best.V)) best.V = line_stats(s_, a, s_.exc).pooled_cost;
     return best;
@@ -904,7 +944,11 @@ Spectra spectra_of(const Eigen::MatrixXd& record, const RecordMeta& meta, Domain
     }
   }
   s.u_time.resize(s.P, s.M);
-  for (int l = 0; l < s.M; ++l) s.u_time.col(l) = record.col(0).segment(static_cast<Eigen::Index>(l) * s.P, s.P);
+  s.y_time.resize(s.P, s.M);
+  for (int l = 0; l < s.M; ++l) {
+    s.u_time.col(l) = record.col(0).segment(static_cast<Eigen::Index>(l) * s.P, s.P);
+    s.y_time.col(l) = record.col(1).segment(static_cast<Eigen::Index>(l) * s.P, s.P);
+  }
   s.xi.resize(L);
   s.hz.resize(L);
   s.cycles.resize(L);
@@ -1331,9 +1375,9 @@ Augment choose_effects(const Diagnosis& dg, const Spectra& s, const Augment& a0,
   }
   if (path.back().nonlinear && !path.back().distortion_fitted)
     rep.notes.push_back(
-        "nonlinearity: detected on the unexcited lines, but a static polynomial at the input or output makes the fit "
-        "on the excited lines worse, so gap_after leaves it out: the nonlinearity is elsewhere (in a feedback loop, "
-        "or behind another element)");
+        "nonlinearity: detected on the unexcited lines, but no polynomial form (static at the input or output, or "
+        "fed back from the output through the model) improves the fit on the excited lines, so gap_after leaves it "
+        "out: the nonlinearity is elsewhere (behind another element, or of higher degree or with memory)");
   for (size_t i = 0; i < path.size(); ++i) {
     const Stage& st = path[i];
     std::string label = "model";

@@ -120,11 +120,15 @@ struct ModeMismatch {
   std::optional<Resonance> mode;             ///< the refitted resonance; absent when none converged
   std::optional<double> model_frequency_hz;  ///< "model_frequency_hz" of the moved mode; absent when the model has none to move
 };
-/// A static polynomial a₂ x² + a₃ x³ at the output or at the input.
+/// Nonlinear distortion as a polynomial: static a₂ x² + a₃ x³ at the output
+/// (x = G u) or at the input (x = u), or in the loop, the measured output fed
+/// back through the model: y = G (u − a₁ y − a₂ y² − a₃ y³).
 struct Nonlinearity {
   bool fitted = false;    ///< false: no signal to form x², x³ from (nothing listed)
   double a2 = 0, a3 = 0;  ///< "a2", "a3"
   bool at_input = false;  ///< "at_input" (1 or 0)
+  bool in_loop = false;   ///< "in_loop" (1 or 0)
+  double a1 = 0;          ///< "a1", listed for the in-loop form only
 };
 /// The first periods carry a transient and are dropped.
 struct Leakage {
