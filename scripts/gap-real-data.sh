@@ -35,7 +35,7 @@ sel=(--input Voltage --output Acceleration1 --skip-periods 1)
 echo "-- the same model on its own Level-1 record"
 "$B/fdsid" gap --model "$T/f16.json" --data "$F/F16Data_FullMSine_Level1.csv" --meta "$F/F16Data_FullMSine.meta.json" \
   "${sel[@]}" | head -3
-echo "-- its fit on Level 7 (MATLAB compare's NRMSE fit; refused while the subspace model is unstable, issue 15)"
+echo "-- its fit on Level 7 (MATLAB compare's NRMSE fit)"
 "$B/fdsid" validate --model "$T/f16.json" --data "$F/F16Data_FullMSine_Level7.csv" \
   --meta "$F/F16Data_FullMSine.meta.json" "${sel[@]}" | head -1 || echo "exit status $?"
 

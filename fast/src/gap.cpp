@@ -11,6 +11,7 @@
 #include <optional>
 #include <numeric>
 #include <tuple>
+#include <unsupported/Eigen/MatrixFunctions>
 
 #include "fdsid/error.hpp"
 #include "fdsid/format.hpp"
@@ -842,31 +843,38 @@ class Diagnosis {
   }
 
   // Leakage: is period l's residual off the mean of the later periods by a
-  // transient? For a discrete model the deviation of a transient is
-  // C (zI − A)⁻¹ z Δx / √P for some real Δx ∈ Rⁿ (the DFT of a free response
-  // over one period), so the statistic is the F ratio of that n-parameter fit,
-  // F_l = ((V0 − V1)/n) / (V1/(2L − n)), over all L lines. Its null law is not
-  // F(n, 2L − n): the lines are not independent when the noise is coloured
-  // (each period's noise carries its own leakage term, smooth in frequency) —
-  // measured F_j of transient-free periods spread from 0.6 to 38 with n = 9.
-  // The later periods, exchangeable with each other when there is no
-  // transient, give that law: log F_j of each later period against the others
-  // after l, and period l is tested as an outlier,
-  // T = (log F_l − mean) / (sd √(1 + 1/J)) ~ t_{J−1} (J ≥ 4 later periods;
-  // log F taken as normal). Continuous-time models (no transient basis in z):
-  // the Fisher combination of the per-line period deviations.
+  // transient? The deviation of a transient is the DFT of a free response over
+  // one period, C (zI − A_d)⁻¹ z Δx / √P for some real Δx ∈ Rⁿ, z = e^{j2πk/P}:
+  // A_d = A for a discrete model, A_d = e^{A Ts} for a continuous one (its
+  // free response sampled: y(t Ts) = C e^{A t Ts} x₀, exact, no hold
+  // involved). So the statistic is the F ratio of that n-parameter fit,
+  // F_l = ((V0 − V1)/n) / (V1/(2L − n)), over all L lines — a test of the
+  // deviation's shape, not of its size, so periods whose noise power differs
+  // (real noise varies 30–50 % from period to period) do not look like a
+  // transient. Its null law is not F(n, 2L − n): the lines are not
+  // independent when the noise is coloured (each period's noise carries its
+  // own leakage term, smooth in frequency) — measured F_j of transient-free
+  // periods spread from 0.6 to 38 with n = 9. The later periods, exchangeable
+  // with each other when there is no transient, give that law: log F_j of each
+  // later period against the others after l, and period l is tested as an
+  // outlier, T = (log F_l − mean) / (sd √(1 + 1/J)) ~ t_{J−1} (J ≥ 4 later
+  // periods; log F taken as normal). A static model (n = 0) has no transient:
+  // the Fisher combination of the per-line period deviations instead.
   double leakage_p(const Augment& a, int l) const {
     const int n = model_.order();
-    if (model_.domain != Domain::Discrete || n == 0) return period_deviation_p(s_, a, l);
+    if (n == 0) return period_deviation_p(s_, a, l);
+    const bool discrete = model_.domain == Domain::Discrete;
+    const Eigen::MatrixXd Ad = discrete ? model_.A : Eigen::MatrixXd((model_.A * s_.Ts).exp());
+    if (!Ad.allFinite()) return period_deviation_p(s_, a, l);
     const Eigen::VectorXcd G = a.G();
     const int Lk = static_cast<int>(s_.all.size());
     std::vector<Eigen::VectorXcd> Phi(n, Eigen::VectorXcd(Lk));
     const Eigen::MatrixXcd I = Eigen::MatrixXcd::Identity(n, n);
     for (int i = 0; i < Lk; ++i) {
       const int k = s_.all[i];
+      const cplx z = discrete ? s_.xi(k) : std::polar(1.0, 2 * M_PI * s_.cycles(k));
       const Eigen::RowVectorXcd row =
-          (s_.xi(k) * I - model_.A.cast<cplx>()).transpose().partialPivLu().solve(model_.C.cast<cplx>().transpose()).transpose() *
-          s_.xi(k);
+          (z * I - Ad.cast<cplx>()).transpose().partialPivLu().solve(model_.C.cast<cplx>().transpose()).transpose() * z;
       for (int j = 0; j < n; ++j) Phi[j](i) = row(j);
     }
     if (!Phi[0].allFinite()) return period_deviation_p(s_, a, l);

@@ -20,9 +20,13 @@
 ///    function of F(2, 2M−2));
 ///  - nonlinearity: the same on the unexcited lines inside the excited band
 ///    (a random-odd multisine leaves them empty; a linear system keeps them so);
-///  - leakage: period l against the mean of the later ones, d = E_l − Ē_{>l},
-///    |d|²/(s²_{>l}(1 + 1/(M−l−1))) ~ F(2, 2(M−l−1) − 2) on every line — model
-///    errors are periodic and cancel in d, so this test sees only the transient;
+///  - leakage: period l against the mean of the later ones, d = E_l − Ē_{>l}
+///    on every line — model errors are periodic and cancel in d, so this test
+///    sees only what changes between periods; d is fitted by a free response
+///    of the model (C (zI − A_d)⁻¹ z Δx, A_d = A or e^{A Ts}) and the F ratio
+///    of that fit is judged against the same ratio of the later periods (a
+///    test of the deviation's shape, not its size: noise whose power varies
+///    from period to period is no transient; see leakage_p in gap.cpp);
 ///  - linear effects: each admitted by a quasi-likelihood F-test
 ///    F = ((V₀ − V₁)/q) / (V₁/(2K − q_total)) ~ F(q, 2K − q_total) (V the
 ///    variance-weighted residual sum, q the effect's real parameters), which
