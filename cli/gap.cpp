@@ -79,6 +79,24 @@ std::string verdict_line(const GapReport& r) {
          sci(r.gap_after) + ") is still above the noise (p " + p_text(r.p_after) + " at level " + fmt(alpha, 3) + ")";
 }
 
+// The best-linear-approximation view (GapDistortion): what the detection
+// lines say about nonlinear distortion on the excited lines.
+std::string distortion_line(const GapReport& r) {
+  const GapDistortion& d = r.distortion;
+  const std::string which = std::to_string(d.lines) + (d.odd_only ? " odd" : "") + " detection lines";
+  if (!d.estimable)
+    return "distortion (best linear approximation view): not estimable, " + which + " (4 needed)";
+  const std::string level =
+      d.level_db ? "distortion " + fmt(*d.level_db, 3) + " dB above the noise of the mean" : "no distortion above the noise";
+  std::string line = "distortion (best linear approximation view, " + which + "): gap " + sci(d.gap) + " there, " +
+                     level + " (p " + p_text(d.p_detected) + "), " + std::to_string(std::lround(100 * d.share)) +
+                     " % of the excess gap; excited lines beyond it: p " + p_text(d.p_beyond);
+  if (d.bla_right)
+    line += " - the model is right as a best linear approximation: the gap is nonlinear distortion" +
+            (d.level_db ? " " + fmt(*d.level_db, 3) + " dB above the noise" : std::string());
+  return line;
+}
+
 int run_gap(const GapCommand& c) {
   refuse_overwrite(c.plot_path, {c.model_path, c.data_path, c.meta_path, c.json_path}, "--plot");
   refuse_overwrite(c.json_path, {c.model_path, c.data_path, c.meta_path}, "--json");
@@ -99,6 +117,7 @@ int run_gap(const GapCommand& c) {
   out << verdict_line(r) << "\n";
   out << "tests: p(gap) " << p_text(r.p_gap) << ", p(nonlinearity, " << r.unexcited << " unexcited lines) "
       << p_text(r.p_nonlinearity) << ", p(leakage) " << p_text(r.p_leakage) << "\n";
+  out << distortion_line(r) << "\n";
   if (!r.bands.empty()) {
     out << "bands (Hz):";
     for (const auto& b : r.bands) out << " " << band_text(b);

@@ -1061,6 +1061,58 @@ void detection_tests(const Diagnosis& dg, const Spectra& s, const Augment& a0, c
   if (s.ne.size() < 4) rep.notes.push_back("fewer than 4 unexcited lines inside the band: nonlinearity not testable");
 }
 
+// The best-linear-approximation view of the model as given (GapDistortion in
+// gap.hpp): the gap on the detection lines, its level and share, and whether
+// the excited lines show more than it.
+// Method: the prediction for excited line k is the mean t of the 4 detection
+// lines nearest in frequency; Z = (Σ t_k − Σ pred_k) / (cv · √(Σ pred_k² +
+// Σ_j c_j² t̄_j²)) with c_j the times detection line j enters the predictions
+// / 4 and t̄_j the prediction level there, cv² = d/(d − 4) (the F(2, d)
+// variance over its squared mean, d = 2M − 2, as in gap_null_sd): the t's are
+// scaled F(2, d) variates under the BLA view (circular Gaussian distortion);
+// one-sided normal p. Heavy tails at small M and few detection lines make the
+// normal approximation rough: it is reported at alpha, not tuned.
+void distortion_view(const Spectra& s, const Augment& a0, const LineStats& st0, GapReport& rep) {
+  GapDistortion& d = rep.distortion;
+  d.odd_only = std::all_of(s.exc.begin(), s.exc.end(), [](int k) { return k % 2 == 1; });
+  std::vector<int> det;
+  for (int k : s.ne)
+    if (!d.odd_only || k % 2 == 1) det.push_back(k);
+  d.lines = static_cast<int>(det.size());
+  d.estimable = det.size() >= 4;
+  if (!d.estimable) return;
+  const LineStats sd = line_stats(s, a0, det);
+  d.gap = gap_of(sd);
+  if (d.gap > 1) d.level_db = 10 * std::log10(d.gap - 1);
+  d.share = rep.gap_before > 1 ? std::max(0.0, d.gap - 1) / (rep.gap_before - 1) : 0.0;
+  d.p_detected = fisher_p(sd.t, s.M);
+  constexpr int kNearest = 4;
+  const size_t J = det.size();
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(J)), level = c;
+  double sum_t = 0, sum_pred = 0, var = 0;
+  std::vector<size_t> order(J);
+  for (size_t i = 0; i < s.exc.size(); ++i) {
+    const int k = s.exc[i];
+    std::iota(order.begin(), order.end(), size_t{0});
+    std::partial_sort(order.begin(), order.begin() + kNearest, order.end(),
+                      [&](size_t x, size_t y) { return std::abs(det[x] - k) < std::abs(det[y] - k); });
+    double pred = 0;
+    for (int q = 0; q < kNearest; ++q) pred += sd.t(static_cast<Eigen::Index>(order[q])) / kNearest;
+    for (int q = 0; q < kNearest; ++q) {
+      c(static_cast<Eigen::Index>(order[q])) += 1.0 / kNearest;
+      level(static_cast<Eigen::Index>(order[q])) = pred;
+    }
+    sum_t += st0.t(static_cast<Eigen::Index>(i));
+    sum_pred += pred;
+    var += pred * pred;
+  }
+  var += c.cwiseProduct(level).squaredNorm();
+  const double dd = 2.0 * s.M - 2, cv = std::sqrt(dd / (dd - 4));
+  const double Z = (sum_t - sum_pred) / (cv * std::sqrt(var));
+  d.p_beyond = std::isfinite(Z) ? 0.5 * std::erfc(Z / std::sqrt(2.0)) : 1.0;
+  d.bla_right = rep.p_gap < rep.options.alpha && d.p_detected < rep.options.alpha && d.p_beyond >= rep.options.alpha;
+}
+
 // Bands of the model as given: the flags and the bands of rep (gap.hpp).
 // Method: Benjamini–Hochberg at `fdr` over p(k) = P(F(2, 2M−2) > t(k)); when
 // no line is flagged, over windows of 8 excited lines (Fisher-combined)
@@ -1478,6 +1530,7 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
   const LineStats st0 = line_stats(s, a0, s.exc);
   require_noise_floor(s, st0);
   detection_tests(dg, s, a0, st0, rep);
+  distortion_view(s, a0, st0, rep);
   gap_bands(s, st0, options.fdr, rep);
 
   rep.candidates = fits_alone(dg, s, a0, st0.pooled_cost, rep.p_nonlinearity);
@@ -1527,6 +1580,11 @@ nlohmann::json gap_report_to_json(const GapReport& r) {
                 {"effect_alpha", r.options.effect_alpha},
                 {"min_share", r.options.min_share},
                 {"fdr", r.options.fdr}};
+  const GapDistortion& d = r.distortion;
+  j["distortion"] = {{"estimable", d.estimable}, {"odd_only", d.odd_only}, {"lines", d.lines},
+                     {"gap", d.gap},             {"share", d.share},       {"p_detected", d.p_detected},
+                     {"p_beyond", d.p_beyond},   {"bla_right", d.bla_right}};
+  j["distortion"]["level_db"] = d.level_db ? nlohmann::json(*d.level_db) : nlohmann::json(nullptr);
   j["periods_used"] = r.periods_used;
   j["excited_lines"] = r.excited;
   j["unexcited_lines"] = r.unexcited;

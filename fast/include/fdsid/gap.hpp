@@ -176,6 +176,39 @@ enum class GapVerdict {
 };
 const char* to_string(GapVerdict verdict);
 
+/// The best-linear-approximation view (Pintelon and Schoukens): a nonlinear
+/// system driven by a random (odd) multisine acts on the excited lines as its
+/// best linear approximation G_BLA plus a stochastic nonlinear distortion
+/// Y_s(k), periodic (the same in every period, so it is part of the gap) and of
+/// the same level on the excited lines as on the unexcited detection lines
+/// beside them. There only the distortion and the noise remain, so the gap on
+/// the detection lines is the gap a model that is right as a BLA would leave
+/// on the excited ones: with Ē = Y_s + N̄, t = M|Ē|²/s² is noncentral
+/// F(2, 2M−2) with mean (M−1)/(M−2)·(1 + M|Y_s|²/σ²), so gap − 1 is the
+/// distortion power against the noise power of the M-period mean.
+struct GapDistortion {
+  /// Detection lines: the unexcited lines inside the excited band, only the
+  /// odd ones when every excited line is odd (even-order distortion falls on
+  /// even lines, never on odd excited ones). Fewer than 4: not estimable.
+  bool estimable = false;
+  bool odd_only = false;
+  int lines = 0;
+  double gap = 1;                ///< the gap on the detection lines (model as given)
+  std::optional<double> level_db;  ///< 10 log10(gap − 1): distortion over the noise of the mean; absent when gap ≤ 1
+  double share = 0;              ///< (gap − 1) / (gap_before − 1): the share of the excess gap it accounts for
+  double p_detected = 1;         ///< Fisher's combination over the detection lines (distortion present?)
+  /// Is the excited lines' gap larger than the distortion predicts? Each
+  /// excited line's t against the mean t of its 4 nearest detection lines
+  /// (the distortion level changes with frequency), the sums compared by a
+  /// normal approximation with the F(2, 2M−2) coefficient of variation
+  /// √(d/(d−4)), d = 2M − 2, for every t (scaled F variates); one-sided.
+  double p_beyond = 1;
+  /// The gap is significant, the distortion is detected, and the excited
+  /// lines show no more than it (p_beyond ≥ alpha): the model is right as a
+  /// best linear approximation and the gap is nonlinear distortion.
+  bool bla_right = false;
+};
+
 struct GapReport {
   double gap_before = 0, gap_after = 0;
   GapVerdict verdict = GapVerdict::NoGap;
@@ -194,6 +227,7 @@ struct GapReport {
   int periods_used = 0;                            ///< M after dropping transient periods
   int excited = 0, unexcited = 0;                  ///< lines in each test
   double p_gap = 1, p_nonlinearity = 1, p_leakage = 1;  ///< detection tests on the model as given
+  GapDistortion distortion;                        ///< the best-linear-approximation view (model as given)
   GapOptions options;
   /// Plot-ready table over the excited lines: frequency (Hz), t(k) of the model
   /// as given and with every present effect added, and the per-line flag.
