@@ -97,23 +97,10 @@ std::string distortion_line(const GapReport& r) {
   return line;
 }
 
-int run_gap(const GapCommand& c) {
-  refuse_overwrite(c.plot_path, {c.model_path, c.data_path, c.meta_path, c.json_path}, "--plot");
-  refuse_overwrite(c.json_path, {c.model_path, c.data_path, c.meta_path}, "--json");
-  refuse_overwrite(c.table_path, {c.model_path, c.data_path, c.meta_path, c.json_path}, "--table");
-  Out out{c.json_path == "-"};
-  const GapOptions& o = c.options;
-  const StateSpace model = read_model(c.model_path);
-  const Records records = read_records(c.data_path, c.meta_path, c.selection);
-  const RecordMeta& meta = records.meta;
-  GapReport r;
-  try {
-    r = diagnose_gap(model, records.samples, records.inputs, meta, o);
-  } catch (const Error& e) {
-    throw e.within(c.data_path);
-  }
+// The text report of one output channel.
+void print_report(Out& out, const GapReport& r, int periods) {
   out << "gap before " << sci(r.gap_before) << " (1 = the model is right up to the noise; " << r.excited
-      << " excited lines, M = " << meta.periods << "), after " << sci(r.gap_after) << "\n";
+      << " excited lines, M = " << periods << "), after " << sci(r.gap_after) << "\n";
   out << verdict_line(r) << "\n";
   out << "tests: p(gap) " << p_text(r.p_gap) << ", p(nonlinearity, " << r.unexcited << " unexcited lines) "
       << p_text(r.p_nonlinearity) << ", p(leakage) " << p_text(r.p_leakage) << "\n";
@@ -133,6 +120,77 @@ int run_gap(const GapCommand& c) {
     out << "\n";
   }
   for (const std::string& n : r.notes) out << "note: " << n << "\n";
+}
+
+// The summary line of several outputs (MultiGapReport's verdict).
+std::string multi_verdict_line(const MultiGapReport& m, const std::vector<std::string>& names) {
+  const double alpha = m.channels.front().options.alpha;
+  const std::string joint =
+      m.joint_tested ? "joint test p " + p_text(m.p_joint) + " at level " + fmt(alpha, 3) : std::string("joint test not computed");
+  std::string effects;
+  for (Effect e : m.present) effects += (effects.empty() ? "" : ", ") + std::string(fdsid::to_string(e));
+  switch (m.verdict) {
+    case GapVerdict::NoGap:
+      return "verdict: no significant gap on any of the " + std::to_string(m.channels.size()) + " outputs (" + joint +
+             ": noise alone)";
+    case GapVerdict::Explained:
+      return "verdict: " + effects + " - explained on every output (" + joint + " on the model as given)";
+    case GapVerdict::Unexplained: break;
+  }
+  std::string open;
+  for (size_t o = 0; o < m.channels.size(); ++o)
+    if (m.channels[o].verdict == GapVerdict::Unexplained) open += (open.empty() ? "" : ", ") + names[o];
+  if (open.empty())
+    return "verdict: a joint gap (" + joint + ") that no single output shows: the outputs' residuals disagree together";
+  return "verdict: NOT fully explained: " + open + " keep" + (open.find(',') == std::string::npos ? "s" : "") +
+         " a significant gap that the effects found do not remove (" + joint + "; per output below)";
+}
+
+int run_gap(const GapCommand& c) {
+  refuse_overwrite(c.plot_path, {c.model_path, c.data_path, c.meta_path, c.json_path}, "--plot");
+  refuse_overwrite(c.json_path, {c.model_path, c.data_path, c.meta_path}, "--json");
+  refuse_overwrite(c.table_path, {c.model_path, c.data_path, c.meta_path, c.json_path}, "--table");
+  Out out{c.json_path == "-"};
+  const GapOptions& o = c.options;
+  const StateSpace model = read_model(c.model_path);
+  const Records records = read_records(c.data_path, c.meta_path, c.selection);
+  const RecordMeta& meta = records.meta;
+  const int outputs = static_cast<int>(records.samples.cols()) - records.inputs;
+  if (outputs > 1) {
+    for (const auto& [opt, path] : {std::pair{"--plot", &c.plot_path}, std::pair{"--table", &c.table_path}})
+      if (!path->empty())
+        throw Error(ErrorKind::Input, opt,
+                    "draws one output, the record has " + std::to_string(outputs) + ": choose one with --output NAME");
+    std::vector<std::string> names;
+    for (int k = 0; k < outputs; ++k)
+      names.push_back(static_cast<size_t>(k) < c.selection.outputs.size() ? c.selection.outputs[k]
+                                                                          : "y" + std::to_string(k + 1));
+    MultiGapReport m;
+    try {
+      m = diagnose_gap_outputs(model, records.samples, records.inputs, meta, o);
+    } catch (const Error& e) {
+      throw e.within(c.data_path);
+    }
+    out << "gap before " << sci(m.gap_before) << " (mean over " << outputs << " outputs; 1 = the model is right up "
+        << "to the noise), after " << sci(m.gap_after) << "; joint gap " << sci(m.gap_joint) << "\n";
+    out << multi_verdict_line(m, names) << "\n";
+    for (const std::string& n : m.notes) out << "note: " << n << "\n";
+    for (size_t k = 0; k < m.channels.size(); ++k) {
+      out << "== output " << k + 1 << " (" << names[k] << ")\n";
+      print_report(out, m.channels[k], meta.periods);
+    }
+    nlohmann::json j = gap_report_to_json(m);
+    for (size_t k = 0; k < m.channels.size(); ++k) j["channels"][k]["name"] = names[k];
+    emit_json(c.json_path, j);
+    return 0;
+  }
+  GapReport r;
+  try {
+    r = diagnose_gap(model, records.samples, records.inputs, meta, o);
+  } catch (const Error& e) {
+    throw e.within(c.data_path);
+  }
+  print_report(out, r, meta.periods);
   if (!c.table_path.empty()) write_gap_table(c.table_path, r);
   emit_json(c.json_path, to_json(r));
   emit_plot(c.plot_path, [&] { return plot::gap_figure(r, meta.periods); });
@@ -182,8 +240,8 @@ void register_gap_diagnosis(CLI::App& app, Action& chosen) {
   auto c = std::make_shared<GapCommand>();
   GapOptions& o = c->options;
   auto* gap = app.add_subcommand("gap", "sim-to-real gap: where a model and a periodic measurement disagree, and why");
-  gap->add_option("--model", c->model_path, "simulation model JSON (SISO)")->required();
-  gap->add_option("--data", c->data_path, "periodic records CSV (u,y), M whole periods")->required();
+  gap->add_option("--model", c->model_path, "simulation model JSON (one input; one output per record output)")->required();
+  gap->add_option("--data", c->data_path, "periodic records CSV (u,y or u,y1,...,yp), M whole periods")->required();
   gap->add_option("--meta", c->meta_path, "meta JSON: period, periods, sample_time, excited_lines")->required();
   add_json_option(gap, c->json_path, "write the report here (- = stdout)");
   add_plot_option(gap, c->plot_path);

@@ -39,6 +39,13 @@ echo "-- its fit on Level 7 (MATLAB compare's NRMSE fit)"
 "$B/fdsid" validate --model "$T/f16.json" --data "$F/F16Data_FullMSine_Level7.csv" \
   --meta "$F/F16Data_FullMSine.meta.json" "${sel[@]}" | head -1 || echo "exit status $?"
 
+echo "== F-16 GVT, three outputs (Acceleration1-3): one order-16 model with three outputs from Level 1, gap on Level 7"
+sel3=(--input Voltage --output Acceleration1 Acceleration2 Acceleration3 --skip-periods 1)
+"$B/fdsid" identify-frf --data "$F/F16Data_FullMSine_Level1.csv" --meta "$F/F16Data_FullMSine.meta.json" "${sel3[@]}" \
+  --domain continuous --order 16 --json "$T/f16m.json" | head -1
+"$B/fdsid" gap --model "$T/f16m.json" --data "$F/F16Data_FullMSine_Level7.csv" --meta "$F/F16Data_FullMSine.meta.json" \
+  "${sel3[@]}" | grep -v '^  '
+
 echo "== cascaded tanks: one period only (expected: refused, exit 2)"
 "$B/fdsid" gap --model "$T/cub.json" --data "$D/cascaded-tanks/dataBenchmark.csv" --input uEst --output yEst \
   --meta "$D/cascaded-tanks/dataBenchmark.meta.json" || echo "exit status $?"

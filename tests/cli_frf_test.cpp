@@ -598,7 +598,7 @@ TEST_F(CliFrf, GapRefusesWhatItCannotUse) {
   const std::string mimo = write("mimo.json", R"({"domain": "discrete", "sample_time": 1.0, "A": [[0.5]], "B": [[1]],
       "C": [[1], [2]], "D": [[0], [0]]})");
   EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", mimo, "--data", path("rec.csv"), "--meta", path("rec.meta.json")}),
-                         {"SISO"}));
+                         {"2 outputs", "the record 1"}));
   EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", model, "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
                                     "--alpha", "5"}),
                          {"--alpha", "(0, 1)"}));
@@ -610,6 +610,55 @@ TEST_F(CliFrf, GapRefusesWhatItCannotUse) {
   EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", model, "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
                                     "--json", path("rec.csv")}),
                          {"refusing to overwrite"}));
+}
+
+// Issue 17, item 4: a record with two outputs (u,y1,y2: two sensors on the
+// same plant, independent noise) and a model with two outputs (C = [c; c]):
+// the contracts' fields for the channels together, each channel's own report
+// under "channels", the joint test; --plot draws one output and is refused
+// with a way out; a two-output model against a u,y record is named.
+TEST_F(CliFrf, GapOfTwoOutputsReportsEachChannelAndTheJointTest) {
+  simulate(256, 8, 0.01, "rec");
+  simulate(256, 8, 0.0, "clean");  // the same seed: the same multisine
+  std::ifstream a(path("rec.csv")), b(path("clean.csv"));
+  std::string la, lb, header;
+  std::getline(a, header);
+  std::getline(b, lb);
+  std::ostringstream csv;
+  csv << "u,y1,y2\n";
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  while (std::getline(a, la) && std::getline(b, lb)) {
+    const double ua = std::stod(la.substr(0, la.find(','))), ub = std::stod(lb.substr(0, lb.find(',')));
+    ASSERT_EQ(ua, ub);
+    char buf[96];
+    std::snprintf(buf, sizeof buf, ",%.17g\n", std::stod(lb.substr(lb.find(',') + 1)) + noise(rng));
+    csv << la << buf;
+  }
+  write("two.csv", csv.str());
+  json two = json::parse(kPintelonModel);
+  two["C"].push_back(two["C"][0]);
+  two["D"].push_back(two["D"][0]);
+  const std::string model = write("two.json", two.dump());
+  const RunResult r = run_fdsid({"gap", "--model", model, "--data", path("two.csv"), "--meta", path("rec.meta.json"),
+                                 "--json", path("gap.json")});
+  ASSERT_TRUE(Succeeded(r)) << r.err;
+  const json j = read_json("gap.json");
+  expect_gap_fields(j);
+  ASSERT_EQ(j["channels"].size(), 2u);
+  for (const auto& c : j["channels"]) expect_gap_fields(c);
+  EXPECT_EQ(j["channels"][1]["output"], 2);
+  EXPECT_TRUE(j["joint"]["tested"].get<bool>());
+  EXPECT_NEAR(j["gap_before"].get<double>(),
+              (j["channels"][0]["gap_before"].get<double>() + j["channels"][1]["gap_before"].get<double>()) / 2,
+              1e-12 * j["gap_before"].get<double>());
+  EXPECT_NE(r.out.find("== output 2 (y2)"), std::string::npos) << r.out;
+  EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", model, "--data", path("two.csv"), "--meta",
+                                    path("rec.meta.json"), "--plot", path("gap.svg")}),
+                         {"--plot", "choose one with --output"}));
+  EXPECT_FALSE(fs::exists(path("gap.svg")));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", model, "--data", path("rec.csv"), "--meta", path("rec.meta.json")}),
+                         {"2 outputs", "the record 1"}));
 }
 
 // Review findings 1 and 15: a 0-based meta (every line k listed as k - 1) made

@@ -492,6 +492,53 @@ TEST(GapDiagnosis, VerdictFollowsTheNumbersAndNeverWorseThanTheBestSingle) {
   EXPECT_GT(explained, 0);  // the checks above met the "explained" branch at least once
 }
 
+// Issue 17, item 4: two sensors on the same structure (a model with two
+// outputs, C = [c; c]), the second one sample late; independent white noise
+// of std 0.01 on each. Channel 1 has no gap, channel 2 a delay of one sample
+// (a channel-local effect, found in that channel's report); the joint test
+// sees the gap of the model as given, and the verdict is "explained". With
+// both sensors right, no channel and the joint test find nothing (a fixed
+// seed: each test's false-alarm probability is its level, 0.01).
+TEST(GapDiagnosis, TwoOutputsASensorDelayOnOne) {
+  const StateSpace g = pintelon_plant();
+  StateSpace two = g;
+  two.C.resize(2, g.order());
+  two.C << g.C, g.C;
+  two.D.resize(2, 1);
+  two.D << g.D, g.D;
+  RecordMeta meta;
+  const Eigen::MatrixXd r1 = with_output(simulate_periodic_record(g, options(21, 0.0), meta), 21,
+                                         [](double, double y) { return y; });
+  const Eigen::MatrixXd late = simulate_periodic_record(testing::one_sample_delay(g), options(21, 0.0), meta);
+  const Eigen::MatrixXd right = simulate_periodic_record(g, options(21, 0.0), meta);
+  ASSERT_EQ(late.col(0), r1.col(0));  // the same multisine: options(21) fixes it
+  const auto record = [&](const Eigen::MatrixXd& second) {
+    const Eigen::MatrixXd r2 = with_output(second, 22, [](double, double y) { return y; });
+    Eigen::MatrixXd rec(r1.rows(), 3);
+    rec << r1.col(0), r1.col(1), r2.col(1);
+    return rec;
+  };
+  const MultiGapReport m = diagnose_gap_outputs(two, record(late), 1, meta);
+  ASSERT_EQ(m.channels.size(), 2u);
+  SCOPED_TRACE(verdict(m.channels[0]) + " | " + verdict(m.channels[1]));
+  EXPECT_EQ(m.channels[0].verdict, GapVerdict::NoGap);
+  EXPECT_EQ(names(m.channels[1].present), std::vector<std::string>{"delay"});
+  EXPECT_NEAR(param(m.channels[1], "delay", "samples"), 1.0, 0.01);  // as in OneSampleDelay
+  EXPECT_EQ(names(m.present), std::vector<std::string>{"delay"});
+  EXPECT_EQ(m.verdict, GapVerdict::Explained);
+  EXPECT_TRUE(m.joint_tested);
+  EXPECT_LT(m.p_joint, 1e-6);
+  EXPECT_NEAR(m.gap_before, (m.channels[0].gap_before + m.channels[1].gap_before) / 2, 1e-12 * m.gap_before);
+  const MultiGapReport n = diagnose_gap_outputs(two, record(right), 1, meta);
+  EXPECT_EQ(n.verdict, GapVerdict::NoGap);
+  EXPECT_GE(n.p_joint, 0.01);
+  EXPECT_TRUE(n.present.empty());
+  // Refused: a model with another number of outputs, several inputs, one output.
+  EXPECT_THROW(diagnose_gap_outputs(g, record(right), 1, meta), Error);
+  EXPECT_THROW(diagnose_gap_outputs(two, record(right), 2, meta), Error);
+  EXPECT_THROW(diagnose_gap_outputs(two, r1, 1, meta), Error);
+}
+
 TEST(GapDiagnosis, RefusesWhatItCannotUse) {
   const StateSpace g = pintelon_plant();
   RecordMeta meta;

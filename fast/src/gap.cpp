@@ -1002,12 +1002,16 @@ std::vector<bool> benjamini_hochberg(const std::vector<double>& p, double q) {
 void check_inputs(const StateSpace& model, const Eigen::MatrixXd& record, int inputs, const RecordMeta& meta,
                   const GapOptions& options) {
   validate(model);
-  if (model.inputs() != 1 || model.outputs() != 1)
-    throw Error(ErrorKind::Input, "model", "the gap diagnosis needs a SISO model (1 input, 1 output), got " +
-                                               std::to_string(model.inputs()) + " inputs and " +
-                                               std::to_string(model.outputs()) + " outputs");
+  if (model.inputs() != 1)
+    throw Error(ErrorKind::Input, "model",
+                "the gap diagnosis takes a model with one input, got " + std::to_string(model.inputs()) +
+                    " (the residual of several inputs needs each one's path: not supported)");
   if (inputs != 1 || record.cols() != 2)
-    throw Error(ErrorKind::Input, "data", "the gap diagnosis needs one input and one output column (u,y)");
+    throw Error(ErrorKind::Input, "data", "the single-output diagnosis needs one input and one output column (u,y)");
+  if (model.outputs() != 1)
+    throw Error(ErrorKind::Input, "model",
+                "has " + std::to_string(model.outputs()) + " outputs, the record 1: give a SISO model for a u,y "
+                "record, or the record's outputs (u,y1,...,yp, or --output NAME ...) for a model with p outputs");
   if (meta.periods < 4)
     throw Error(ErrorKind::Input, "meta field \"periods\"",
                 "the gap needs at least 4 periods (the noise floor's F(2, 2M-2) law has a finite variance only for "
@@ -1588,6 +1592,151 @@ nlohmann::json gap_report_to_json(const GapReport& r) {
   j["periods_used"] = r.periods_used;
   j["excited_lines"] = r.excited;
   j["unexcited_lines"] = r.unexcited;
+  j["notes"] = r.notes;
+  return j;
+}
+
+// ---- several output channels (gap.hpp, MultiGapReport) ----
+
+namespace {
+
+// The model's output row o as a SISO model.
+StateSpace output_row(const StateSpace& model, int o) {
+  StateSpace r = model;
+  r.C = model.C.row(o);
+  r.D = model.D.row(o);
+  return r;
+}
+
+// The joint test over the excited lines (gap.hpp): complex Hotelling per line.
+void joint_test(const StateSpace& model, const Eigen::MatrixXd& record, const RecordMeta& meta, MultiGapReport& rep) {
+  const int p = model.outputs(), M = meta.periods;
+  if (M < p + 3) {
+    rep.notes.push_back("joint test of the " + std::to_string(p) + " outputs not computed: it needs M >= p + 3 = " +
+                        std::to_string(p + 3) + " periods, got " + std::to_string(M));
+    return;
+  }
+  std::vector<Spectra> sp;
+  std::vector<Eigen::VectorXcd> G;
+  for (int o = 0; o < p; ++o) {
+    Eigen::MatrixXd rec(record.rows(), 2);
+    rec << record.col(0), record.col(1 + o);
+    sp.push_back(spectra_of(rec, meta, model.domain));
+    const StateSpace row = output_row(model, o);
+    G.emplace_back(sp.back().xi.size());
+    for (Eigen::Index k = 0; k < G.back().size(); ++k) G.back()(k) = transfer(row, sp.back().xi(k))(0, 0);
+  }
+  const std::vector<int>& exc = sp[0].exc;
+  const boost::math::fisher_f law(2.0 * p, 2.0 * (M - p));
+  double chi = 0, sumF = 0;
+  for (int k : exc) {
+    Eigen::MatrixXcd E(M, p);
+    for (int o = 0; o < p; ++o)
+      for (int l = 0; l < M; ++l) E(l, o) = sp[o].Y(l, k) - G[o](k) * sp[o].U(l, k);
+    const Eigen::RowVectorXcd mean = E.colwise().mean();
+    const Eigen::MatrixXcd D = E.rowwise() - mean;
+    const Eigen::MatrixXcd S = D.adjoint() * D / static_cast<double>(M - 1);
+    const Eigen::LDLT<Eigen::MatrixXcd> ldlt(S);
+    const double T2 = M * (mean * ldlt.solve(mean.adjoint()))(0, 0).real();
+    const double F = (M - p) / (p * (M - 1.0)) * T2;
+    sumF += F;
+    const double pk = boost::math::cdf(boost::math::complement(law, std::max(0.0, F)));
+    chi += -2 * std::log(std::max(pk, std::numeric_limits<double>::min()));
+  }
+  rep.joint_tested = true;
+  rep.gap_joint = sumF / exc.size() * (M - p - 1.0) / (M - p);
+  rep.p_joint = boost::math::cdf(boost::math::complement(boost::math::chi_squared(2.0 * exc.size()), chi));
+}
+
+}  // namespace
+
+MultiGapReport diagnose_gap_outputs(const StateSpace& model, const Eigen::MatrixXd& record, int inputs,
+                                    const RecordMeta& meta, const GapOptions& options) {
+  validate(model);
+  if (inputs != 1 || model.inputs() != 1)
+    throw Error(ErrorKind::Input, inputs != 1 ? "data" : "model",
+                "the gap diagnosis takes one input (several outputs are diagnosed channel by channel); got " +
+                    std::to_string(inputs != 1 ? inputs : model.inputs()) +
+                    " inputs: the residual of several inputs needs each one's path, not supported; choose a "
+                    "single-input experiment (--input NAME)");
+  const int p = static_cast<int>(record.cols()) - inputs;
+  if (p < 2) throw Error(ErrorKind::Input, "data", "one output: use the single-output diagnosis");
+  if (model.outputs() != p)
+    throw Error(ErrorKind::Input, "model",
+                "has " + std::to_string(model.outputs()) + " outputs, the record " + std::to_string(p) +
+                    " (give the model's outputs in the record's order, e.g. --output A B C)");
+  MultiGapReport rep;
+  for (int o = 0; o < p; ++o) {
+    Eigen::MatrixXd rec(record.rows(), 2);
+    rec << record.col(0), record.col(1 + o);
+    try {
+      rep.channels.push_back(diagnose_gap(output_row(model, o), rec, 1, meta, options));
+    } catch (const Error& e) {
+      throw Error(e.kind(), e.where() + " (output " + std::to_string(o + 1) + ")", e.message());
+    }
+  }
+  joint_test(model, record, meta, rep);
+  bool any_effect = false, all_explained_or_none = true, some_explained = false;
+  for (const GapReport& r : rep.channels) {
+    rep.gap_before += r.gap_before / p;
+    rep.gap_after += r.gap_after / p;
+    for (Effect e : r.present)
+      if (std::find(rep.present.begin(), rep.present.end(), e) == rep.present.end()) rep.present.push_back(e);
+    any_effect = any_effect || !r.present.empty();
+    all_explained_or_none = all_explained_or_none && r.verdict != GapVerdict::Unexplained;
+    some_explained = some_explained || r.verdict == GapVerdict::Explained;
+  }
+  const bool joint_passes = !rep.joint_tested || rep.p_joint >= options.alpha;
+  if (!any_effect && joint_passes && all_explained_or_none)
+    rep.verdict = GapVerdict::NoGap;
+  else if (all_explained_or_none && some_explained && (joint_passes || any_effect))
+    rep.verdict = GapVerdict::Explained;
+  else
+    rep.verdict = GapVerdict::Unexplained;
+  return rep;
+}
+
+nlohmann::json gap_report_to_json(const MultiGapReport& r) {
+  nlohmann::json j;
+  j["gap_before"] = r.gap_before;
+  j["gap_after"] = r.gap_after;
+  j["verdict"] = to_string(r.verdict);
+  j["present"] = nlohmann::json::array();
+  for (Effect e : r.present) j["present"].push_back(to_string(e));
+  std::vector<std::array<double, 2>> bands;
+  for (const GapReport& c : r.channels) bands.insert(bands.end(), c.bands.begin(), c.bands.end());
+  std::sort(bands.begin(), bands.end());
+  std::vector<std::array<double, 2>> merged;
+  for (const auto& b : bands)
+    if (!merged.empty() && b[0] <= merged.back()[1])
+      merged.back()[1] = std::max(merged.back()[1], b[1]);
+    else
+      merged.push_back(b);
+  j["bands"] = nlohmann::json::array();
+  for (const auto& b : merged) j["bands"].push_back({b[0], b[1]});
+  std::vector<std::pair<double, Effect>> cand;
+  for (Effect e : kAllEffects) {
+    double g = 0;
+    for (const GapReport& c : r.channels)
+      for (const EffectFit& f : c.candidates)
+        if (f.effect() == e) g += f.gap_after / static_cast<double>(r.channels.size());
+    cand.emplace_back(g, e);
+  }
+  std::stable_sort(cand.begin(), cand.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  j["candidates"] = nlohmann::json::array();
+  for (const auto& [g, e] : cand)
+    j["candidates"].push_back({{"effect", to_string(e)},
+                               {"gap_after", g},
+                               {"shrink", 1.0 - g / r.gap_before},
+                               {"parameters", nlohmann::json::object()},
+                               {"note", "mean over the channels; each channel's parameters under channels"}});
+  j["joint"] = {{"tested", r.joint_tested}, {"gap", r.gap_joint}, {"p", r.p_joint}};
+  j["channels"] = nlohmann::json::array();
+  for (size_t o = 0; o < r.channels.size(); ++o) {
+    nlohmann::json c = gap_report_to_json(r.channels[o]);
+    c["output"] = static_cast<int>(o) + 1;
+    j["channels"].push_back(c);
+  }
   j["notes"] = r.notes;
   return j;
 }

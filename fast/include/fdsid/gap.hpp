@@ -249,6 +249,51 @@ struct GapReport {
 GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, int inputs, const RecordMeta& meta,
                        const GapOptions& options = {});
 
+/// Several output channels (issue 17, item 4): a single-input record with p ≥ 2
+/// outputs (u, y1, …, yp) and a model with p outputs. Each channel o is
+/// diagnosed as diagnose_gap does, with the model's row o (C_o, D_o): effects
+/// that are local to a channel (a sensor's delay, gain or low-pass) are found
+/// in that channel's report. Combined:
+///  - gap_before, gap_after: the means over the channels of theirs (each 1 in
+///    expectation for a right model, so the mean is too);
+///  - the joint test: per excited line the complex Hotelling statistic of the
+///    p residuals over the M periods, T² = M Ēᴴ S⁻¹ Ē (S the sample covariance,
+///    divisor M − 1), (M − p)/(p (M − 1)) T² ~ F(2p, 2(M − p)) for circular
+///    complex Gaussian noise correlated across the outputs in any way; Fisher's
+///    combination over the lines. gap_joint is the mean of those F over the
+///    lines divided by their mean (M − p)/(M − p − 1): 1 in expectation.
+///    Needs M ≥ p + 3 (finite F variance); fewer periods: not computed, a note;
+///  - verdict: no_gap when the joint test passes and no channel has an effect
+///    present; explained when every channel is explained or has no gap, one at
+///    least explained, and the joint test passes or some effect is present;
+///    unexplained otherwise;
+///  - present: the union over the channels (channel order, then each
+///    channel's order).
+struct MultiGapReport {
+  std::vector<GapReport> channels;
+  double gap_before = 0, gap_after = 0;
+  double gap_joint = 1, p_joint = 1;
+  bool joint_tested = false;
+  GapVerdict verdict = GapVerdict::NoGap;
+  std::vector<Effect> present;
+  std::vector<std::string> notes;
+};
+
+/// Throws Error(Input) as diagnose_gap does, and for several inputs (the
+/// per-channel residual of several inputs needs each input's path; not
+/// supported), a record whose output count differs from the model's, or a
+/// single output (use diagnose_gap).
+MultiGapReport diagnose_gap_outputs(const StateSpace& model, const Eigen::MatrixXd& record, int inputs,
+                                    const RecordMeta& meta, const GapOptions& options = {});
+
+/// `fdsid gap --json` for several outputs: CONTRACTS.md's fields for the
+/// channels together (gap_before, gap_after: the means; present: the union;
+/// bands: every channel's, merged; candidates: each effect's gap_after
+/// averaged over the channels, each channel fitting its own), the verdict, the
+/// joint test, and "channels": each channel's own report (gap_report_to_json)
+/// with its "output" index (1-based).
+nlohmann::json gap_report_to_json(const MultiGapReport& report);
+
 /// The report as CONTRACTS.md's `fdsid gap` JSON (gap_before, gap_after,
 /// present, bands, candidates) plus the tests' p-values, levels and the chosen
 /// effects' joint parameters.
