@@ -205,8 +205,8 @@ int run_gap_validate(GapValidateCommand c) {
   o.progress = progress("gap-validate: cases");
   const GapValidation v = validate_gap(o);
   const nlohmann::json j = to_json(v);
-  out << "gap-validate: " << v.cases << " blind cases (P = " << o.period << ", M = " << o.periods << ", seed "
-      << o.seed << "), exact verdicts " << sci(v.accuracy, 3) << "\n";
+  out << "gap-validate: " << v.cases << " blind cases (" << fdsid::to_string(o.family) << " family, P = " << o.period
+      << ", M = " << o.periods << ", seed " << o.seed << "), exact verdicts " << sci(v.accuracy, 3) << "\n";
   for (const auto& cat : v.by_category)
     out << "  " << cat.first << ": " << cat.second[0] << "/" << cat.second[1] << " correct\n";
   // Rates of a category with no case are NaN: "n/a", not "nan"; numbers in 4
@@ -272,6 +272,13 @@ void register_gap_validate(CLI::App& app, Action& chosen) {
   gval->add_option("--seed", o.seed, "random seed")->capture_default_str();
   gval->add_option("--period", o.period, "samples per period P (default 1024)")->check(CLI::Range(32, 1 << 20));
   gval->add_option("--periods", o.periods, "periods M (default 8)")->check(CLI::Range(4, 1000));
+  gval->add_option("--family", o.family,
+                   "case family: classic (default), structure (lightly damped many-mode structures, noise rising with "
+                   "frequency, a spring nonlinearity in the loop) or mixed (alternating cycles of 20)")
+      ->transform(choice(std::map<std::string, GapFamily>{{"classic", GapFamily::Classic},
+                                                          {"structure", GapFamily::Structure},
+                                                          {"mixed", GapFamily::Mixed}},
+                         "is not a family (classic, structure, mixed)"));
   gval->add_option("--threads", o.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
   gval->add_option("--workdir", o.workdir, "write the cases' files here (default: a temporary directory)");
   gval->add_flag("--keep-files", o.keep_files, "keep each case's model.json, data.csv, meta.json");

@@ -292,6 +292,51 @@ TEST(GapCases, NoiseDiffersPerPeriodAndHasTheStatedLevel) {
   EXPECT_NEAR(sum / n, 1.0, 0.1);
 }
 
+// The structure family (gap_cases.hpp; issue 17 item 5): a lightly damped
+// many-mode model with D = 0, output noise rising with frequency, and the
+// nonlinearity a spring in the loop whose noise-free record is a periodic
+// steady state (every period equal to the loop's settling tolerance, 1e-11 of
+// the peak, plus the FFT's rounding: 1e-9 allowed), with distortion on the
+// unexcited lines at the calibrated ratio (recomputed from the record, as in
+// CalibrationRatioInsideTheRequestedRange). The classic family is untouched:
+// the same seed without the flag gives the classic draws (DeterministicInTheSeed).
+TEST(GapCases, StructureFamilyWithASpringInTheLoop) {
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    GapCaseOptions o;
+    o.effects = {Effect::Nonlinearity};
+    o.strength = seed % 2 ? Strength::Clear : Strength::Subtle;
+    o.seed = 700 + seed;
+    o.noise = false;
+    o.structure = true;
+    const GapCase c = make_gap_case(o);
+    SCOPED_TRACE("seed " + std::to_string(o.seed));
+    EXPECT_EQ(c.truth["family"], "structure");
+    const auto& modes = c.truth["system"]["modes"];
+    EXPECT_GE(modes.size(), 5u);
+    EXPECT_LE(modes.size(), 8u);
+    for (const auto& m : modes) {
+      EXPECT_GE(m["damping"].get<double>(), 0.005);
+      EXPECT_LE(m["damping"].get<double>(), 0.05);
+    }
+    EXPECT_EQ(c.sim_model.D(0, 0), 0.0);
+    EXPECT_TRUE(c.truth["system"]["real_pole"].is_null());
+    // 1 − a q⁻¹ with a ∈ [0.5, 0.95]: |H_v| rises from line 1 to P/2.
+    EXPECT_LT(c.truth["noise"]["filter"]["b"][1].get<double>(), -0.5 + 1e-12);
+    EXPECT_LT(noise_variance(c, 1), noise_variance(c, c.meta.period / 2 - 1));
+    EXPECT_EQ(c.truth["details"]["nonlinearity"]["location"], "loop");
+    const int P = c.meta.period, M = c.meta.periods;
+    const double peak = c.record.col(1).head(P).cwiseAbs().maxCoeff();
+    for (int l = 1; l < M; ++l)
+      EXPECT_LT((c.record.col(1).segment(static_cast<Eigen::Index>(l) * P, P) - c.record.col(1).head(P)).cwiseAbs().maxCoeff(),
+                1e-9 * peak);
+    const double r = c.truth["details"]["nonlinearity"]["ratio"].get<double>();
+    const auto range = gap_ratio_range(o.strength);
+    EXPECT_GE(r, range[0] * (1 - 1e-6));
+    EXPECT_LE(r, range[1] * (1 + 1e-6));
+    EXPECT_NEAR(recomputed_ratio(c, "nonlinearity"), r, 1e-6 * r);
+  }
+}
+
 TEST(GapCases, NamesAndErrors) {
   for (const std::string& name : gap_effect_names()) EXPECT_NO_THROW(make({name}, Strength::Subtle, 5, true, 64, 2));
   auto expect_input = [](const GapCaseOptions& o) {

@@ -173,6 +173,7 @@ struct Injected {
   int mode = 0;                                        // mode_mismatch: ω' = ω (1 + s δ0), ζ' = ζ e^{s λ0}
   double shift0 = 0, damping_log0 = 0;
   bool at_input = false;                               // nonlinearity: x + s (a2 x²/r + a3 x³/r²)
+  bool in_loop = false;                                // nonlinearity (structure family): u − s (a2 y²/r + a3 y³/r²)
   double quad0 = 0, cubic0 = 0, reference_rms = 1;
   std::vector<int> lines;                              // the lines the ratio is taken over
   std::vector<double> line_ratio;                      // per line, at the final scale
@@ -191,6 +192,7 @@ struct Chain {
   std::vector<Section> series;
   double D = 0;
   StaticPolynomial in_nl, out_nl;  // f_in, f_out
+  StaticPolynomial loop_nl;        // feedback f(y) − y: the plant's input is x − (loop_nl(y) − y)
   std::vector<Section> sensor;
   double gain = 1, delay = 0, leak = 0;
 
@@ -205,6 +207,40 @@ struct Chain {
     for (const Section& s : sensor) g *= s.at(q);
     if (with_delay && delay != 0) g *= std::polar(1.0, -omega * delay);
     return g;
+  }
+  // The plant with the loop closed, y = plant(x − f(y)), f(y) = loop_nl(y) − y,
+  // simulated sample by sample over x from the section states `w` (zero: from
+  // rest; carried on between calls). D = 0 and every parallel section strictly
+  // proper, so y(t) depends on the input before t only. Returns false when y
+  // leaves [−1e6 r, 1e6 r] (the loop is unstable).
+  using LoopState = std::vector<std::array<double, 2>>;  // parallel sections, then series
+  bool loop_filter(const std::vector<double>& x, std::vector<double>& y, LoopState& w) const {
+    w.resize(parallel.size() + series.size(), {0.0, 0.0});
+    y.resize(x.size());
+    const double bound = 1e6 * loop_nl.r;
+    const std::size_t np = parallel.size();
+    for (std::size_t t = 0; t < x.size(); ++t) {
+      double yt = 0;
+      for (std::size_t i = 0; i < np; ++i) yt += w[i][0];  // b0 = 0: the output is w1
+      for (std::size_t i = 0; i < series.size(); ++i) {
+        const Section& s = series[i];
+        std::array<double, 2>& ws = w[np + i];
+        const double in = yt;
+        yt = s.b0 * in + ws[0];
+        ws[0] = s.b1 * in - s.a1 * yt + ws[1];
+        ws[1] = s.b2 * in - s.a2 * yt;
+      }
+      if (!(std::abs(yt) <= bound)) return false;
+      y[t] = yt;
+      const double v = x[t] - (loop_nl(yt) - yt);
+      for (std::size_t i = 0; i < np; ++i) {
+        const Section& s = parallel[i];
+        const double out = w[i][0];
+        w[i][0] = s.b1 * v - s.a1 * out + w[i][1];
+        w[i][1] = s.b2 * v - s.a2 * out;
+      }
+    }
+    return true;
   }
   void plant_filter(const std::vector<double>& x, std::vector<double>& y) const {
     y.assign(x.size(), 0.0);
@@ -272,7 +308,8 @@ Chain make_chain(const Base& base, const std::vector<const Injected*>& effects) 
         modes[static_cast<std::size_t>(e->mode)].zeta *= std::exp(s * e->damping_log0);
         break;
       case Effect::Nonlinearity:
-        (e->at_input ? c.in_nl : c.out_nl) = StaticPolynomial{true, s * e->quad0, s * e->cubic0, e->reference_rms};
+        (e->in_loop ? c.loop_nl : e->at_input ? c.in_nl : c.out_nl) =
+            StaticPolynomial{true, s * e->quad0, s * e->cubic0, e->reference_rms};
         break;
       case Effect::Leakage: c.leak = s; break;
     }
@@ -302,7 +339,32 @@ struct Setting {
   std::vector<double> w;          // noise shape |H_v|² at every bin (mean 1 over the excited lines)
 };
 
-/// Steady-state output spectrum (bins 0 … P/2) of one period.
+/// One period of the loop's periodic steady state for the periodic plant
+/// input x (one period): simulated from rest, period by period (the state
+/// carried on), until a period repeats the previous one to 1e-11 of its peak;
+/// at most 4000 periods. False when the loop does not settle.
+bool loop_steady(const Chain& c, const std::vector<double>& x, std::vector<double>& y) {
+  Chain::LoopState w;
+  std::vector<double> prev, cur;
+  if (!c.loop_filter(x, prev, w)) return false;
+  for (int period = 1; period < 4000; ++period) {
+    if (!c.loop_filter(x, cur, w)) return false;
+    double peak = 0, diff = 0;
+    for (std::size_t t = 0; t < cur.size(); ++t) {
+      peak = std::max(peak, std::abs(cur[t]));
+      diff = std::max(diff, std::abs(cur[t] - prev[t]));
+    }
+    if (diff <= 1e-11 * peak) {
+      y = std::move(cur);
+      return true;
+    }
+    prev.swap(cur);
+  }
+  return false;
+}
+
+/// Steady-state output spectrum (bins 0 … P/2) of one period; empty when the
+/// chain's loop does not settle.
 std::vector<cplx> steady(const Chain& c, const Setting& st, Fft& fft, bool with_delay) {
   const std::size_t bins = st.U.size();
   std::vector<cplx> X = st.U;
@@ -311,7 +373,13 @@ std::vector<cplx> steady(const Chain& c, const Setting& st, Fft& fft, bool with_
     for (double& v : x) v = c.in_nl(v);
     X = fft.forward(x.data());
   }
-  for (std::size_t k = 0; k < bins; ++k) X[k] *= c.plant_at(st.q[k]);
+  if (c.loop_nl.on) {
+    std::vector<double> y;
+    if (!loop_steady(c, fft.inverse(X), y)) return {};
+    X = fft.forward(y.data());
+  } else {
+    for (std::size_t k = 0; k < bins; ++k) X[k] *= c.plant_at(st.q[k]);
+  }
   if (c.out_nl.on) {
     std::vector<double> x = fft.inverse(X);
     for (double& v : x) v = c.out_nl(v);
@@ -329,7 +397,12 @@ std::vector<double> transient(const Chain& c, const Setting& st, const std::vect
   for (std::size_t t = 0; t < N; ++t) x[t] = st.u[t % P];
   if (c.in_nl.on)
     for (double& v : x) v = c.in_nl(v);
-  c.plant_filter(x, y);
+  if (c.loop_nl.on) {
+    Chain::LoopState w;
+    if (!c.loop_filter(x, y, w)) return std::vector<double>(N, 0.0);  // never: the loop settled in steady()
+  } else {
+    c.plant_filter(x, y);
+  }
   if (c.out_nl.on)
     for (double& v : y) v = c.out_nl(v);
   for (const Section& s : c.sensor) {
@@ -390,6 +463,12 @@ class Calibrator {
     std::vector<double> r;
     switch (e.effect) {
       case Effect::Nonlinearity: {
+        if (e.in_loop) {  // the distortion of the closed loop (no deviation when it does not settle)
+          const std::vector<cplx> Y = steady(make_chain(base_, {&es}), st_, fft_, true);
+          for (int k : st_.unexcited_band)
+            r.push_back(Y.empty() ? 0.0 : std::norm(Y[static_cast<std::size_t>(k)]) * st_.M / st_.w[static_cast<std::size_t>(k)]);
+          break;
+        }
         std::vector<double> x = e.at_input ? st_.u : st_.y_sim;
         const StaticPolynomial f{true, s * e.quad0, s * e.cubic0, e.reference_rms};
         for (double& v : x) v = f(v);
@@ -516,6 +595,25 @@ Base draw_system(Draw& d, double w_lo, double w_hi) {
   return b;
 }
 
+// The structure family's model (gap_cases.hpp): 5 … 8 resonances spread as in
+// draw_system, ζ log-uniform on [0.005, 0.05], no real pole, D = 0.
+Base draw_structure(Draw& d, double w_lo, double w_hi) {
+  Base b;
+  const int n = d.integer(5, 8);
+  const double l0 = std::log(w_lo), l1 = std::log(w_hi);
+  const double overall = std::pow(10.0, d.uniform(-1, 1));
+  for (int i = 0; i < n; ++i) {
+    Mode m;
+    m.omega = std::exp(l0 + (l1 - l0) * (i + d.uniform(0.15, 0.85)) / n);
+    m.zeta = d.log_uniform(0.005, 0.05);
+    const double peak = overall * d.log_uniform(0.3, 3.0);
+    const cplx p = m.pole();
+    m.residue = d.sign() * peak * (1 - std::abs(p)) * std::polar(1.0, -kPi / 2 + d.uniform(-0.4, 0.4));
+    b.modes.push_back(m);
+  }
+  return b;
+}
+
 // unmodelled_mode: the frequency log-uniform over the band, at least 12 %
 // away from every model mode (the best of 200 tries), ζ log-uniform on
 // [0.01, 0.1], then series (a unit-DC-gain bump of peak ratio 1 + s κ0) or
@@ -573,8 +671,9 @@ void draw_mode_mismatch(Injected& e, Draw& d, bool clear, const Base& base) {
 // nonlinearity: at the input or the output, quadratic, cubic or both, each
 // coefficient of random sign and log-uniform size, relative to the RMS of
 // the signal it acts on.
-void draw_nonlinearity(Injected& e, Draw& d, bool clear, const Setting& st) {
-  e.at_input = d.coin();
+void draw_nonlinearity(Injected& e, Draw& d, bool clear, const Setting& st, bool in_loop) {
+  e.in_loop = in_loop;
+  e.at_input = !in_loop && d.coin();
   const double u = d.unit();
   const int type = u < 1.0 / 3 ? 0 : u < 2.0 / 3 ? 1 : 2;  // quadratic, cubic, both
   auto coef = [&] { return d.sign() * (clear ? d.log_uniform(0.02, 0.1) : d.log_uniform(0.002, 0.01)); };
@@ -585,12 +684,22 @@ void draw_nonlinearity(Injected& e, Draw& d, bool clear, const Setting& st) {
   for (double v : x) ss += v * v;
   e.reference_rms = std::sqrt(ss / static_cast<double>(x.size()));
   e.scale_max = 0.5 / std::max(std::abs(e.quad0), std::abs(e.cubic0));
+  if (in_loop) {
+    // In the loop the spring's incremental gain f'(y) = s (2 a2 y/r + 3 a3 y²/r²)/r
+    // meets the plant's peak gain: at |y| ≤ 3r, |f'| ≤ s (6|a2| + 27|a3|)/r; keep
+    // |f'| · max|G| ≤ 0.5 (small-gain: the loop stays a contraction around the
+    // linear response) or the static bound, whichever is smaller.
+    double gmax = 0;
+    for (int k : st.band) gmax = std::max(gmax, std::abs(st.Hsim[static_cast<std::size_t>(k)]));
+    const double slope = (6 * std::abs(e.quad0) + 27 * std::abs(e.cubic0)) / e.reference_rms;
+    e.scale_max = std::min(e.scale_max, 0.5 / (slope * gmax));
+  }
 }
 
 // One effect's physical parameters at magnitude 1 for the strength, and the
 // largest magnitude scale_max its physical bounds allow (see each draw).
 void draw_effect(Injected& e, Draw& d, Strength strength, const Base& base, const Setting& st, double w_lo,
-                 double w_band) {
+                 double w_band, bool structure) {
   const bool clear = strength == Strength::Clear;
   switch (e.effect) {
     case Effect::GainError: {
@@ -618,7 +727,7 @@ void draw_effect(Injected& e, Draw& d, Strength strength, const Base& base, cons
     }
     case Effect::UnmodelledMode: draw_unmodelled_mode(e, d, clear, base, st, w_lo, w_band); break;
     case Effect::ModeMismatch: draw_mode_mismatch(e, d, clear, base); break;
-    case Effect::Nonlinearity: draw_nonlinearity(e, d, clear, st); break;
+    case Effect::Nonlinearity: draw_nonlinearity(e, d, clear, st, structure); break;
     case Effect::Leakage:
       e.scale_max = 1.0;  // 1: from rest
       break;
@@ -658,11 +767,12 @@ json effect_json(const Injected& e, const Base& base) {
       break;
     }
     case Effect::Nonlinearity:
-      j["location"] = e.at_input ? "input" : "output";
+      j["location"] = e.in_loop ? "loop" : e.at_input ? "input" : "output";
       j["quadratic"] = s * e.quad0;
       j["cubic"] = s * e.cubic0;
       j["reference_rms"] = e.reference_rms;
-      j["form"] = "x + quadratic x^2/r + cubic x^3/r^2";
+      j["form"] = e.in_loop ? "plant input u - (quadratic y^2/r + cubic y^3/r^2), y the plant output"
+                            : "x + quadratic x^2/r + cubic x^3/r^2";
       break;
     case Effect::Leakage:
       j["initial_state"] = s == 1.0 ? "rest" : "partly settled";
@@ -745,9 +855,11 @@ void simulate_model(const Base& base, Fft& fft, Setting& st) {
 // Step 4 of gap_cases.hpp, the shape: H_v a random stable first- or
 // second-order filter (coin, then its coefficients), normalised to mean
 // |H_v|² = 1 over the excited lines; st.w = |H_v|² at every line.
-Section draw_noise_filter(Draw& d, Setting& st) {
+Section draw_noise_filter(Draw& d, Setting& st, bool rising) {
   Section hv;
-  if (d.coin()) {
+  if (rising) {  // the structure family: 1 − a q⁻¹, rising with frequency
+    hv.b1 = -d.uniform(0.5, 0.95);
+  } else if (d.coin()) {
     hv.b1 = d.uniform(-0.6, 0.6);
     hv.a1 = -d.uniform(-0.3, 0.9);
   } else {
@@ -782,7 +894,7 @@ std::vector<Injected> draw_effects(Draw& d, const GapCaseOptions& o, const Base&
   for (Effect effect : o.effects) {
     Injected e;
     e.effect = effect;
-    draw_effect(e, d, o.strength, base, st, w_lo, w_band);
+    draw_effect(e, d, o.strength, base, st, w_lo, w_band, o.structure);
     const auto range = gap_ratio_range(o.strength);
     e.target = d.log_uniform(range[0], range[1]);
     effects.push_back(e);
@@ -880,6 +992,8 @@ TrueOutput true_output(const Base& base, const std::vector<Injected>& effects, c
   const Chain truth_chain = make_chain(base, ptrs);
   TrueOutput out;
   out.Y = steady(truth_chain, st, fft, true);
+  if (out.Y.empty())
+    throw Error(ErrorKind::Numerical, kWhere, "the nonlinearity's loop does not settle at the calibrated magnitude");
   const std::vector<double> y_ss = fft.inverse(out.Y);
   const std::size_t N = static_cast<std::size_t>(P) * static_cast<std::size_t>(M);
   out.y.resize(N);
@@ -969,6 +1083,7 @@ void write_truth(const GapCaseOptions& o, const Base& base, const Setting& st, c
   t["effects"] = json::array();
   for (Effect e : o.effects) t["effects"].push_back(to_string(e));
   t["strength"] = effects.empty() ? "none" : to_string(o.strength);
+  t["family"] = o.structure ? "structure" : "classic";
   t["seed"] = o.seed;
   t["period"] = st.P;
   t["periods"] = st.M;
@@ -1014,9 +1129,9 @@ GapCase make_gap_case(const GapCaseOptions& o) {
   // Resonances inside the excited band.
   const double w_band = kTwoPi * st.K / st.P;
   const double w_lo = std::max(0.08 * w_band, kTwoPi * 2 / st.P), w_hi = 0.9 * w_band;
-  const Base base = draw_system(d, w_lo, w_hi);
+  const Base base = o.structure ? draw_structure(d, w_lo, w_hi) : draw_system(d, w_lo, w_hi);
   simulate_model(base, fft, st);
-  const Section hv = draw_noise_filter(d, st);
+  const Section hv = draw_noise_filter(d, st, o.structure);
 
   CaseNumbers n;
   n.signal = signal_power(st);

@@ -35,6 +35,7 @@ GapCaseOptions schedule(const GapValidationOptions& o, int i, std::string& categ
   c.period = o.period;
   c.periods = o.periods;
   c.seed = o.seed * 1000003ULL + static_cast<std::uint64_t>(i);
+  c.structure = o.family == GapFamily::Structure || (o.family == GapFamily::Mixed && (i / 20) % 2 == 1);
   const auto& names = kAllEffects;
   const int slot = i % 20;
   if (slot < 2) {
@@ -197,6 +198,15 @@ bool gap_validation_targets_met(const GapValidation& v) {
   auto ok = [](double r, double target, bool above) { return std::isnan(r) || (above ? r >= target : r <= target); };
   return ok(rate(v, "clear"), 0.95, true) && ok(subtle_or_pair_rate(v), 0.80, true) &&
          ok(v.false_alarm_rate, 0.05, false) && ok(share_at_most_2(v), 1.0, true);
+}
+
+const char* to_string(GapFamily family) {
+  switch (family) {
+    case GapFamily::Classic: return "classic";
+    case GapFamily::Structure: return "structure";
+    case GapFamily::Mixed: return "mixed";
+  }
+  return "classic";
 }
 
 nlohmann::json gap_validation_to_json(const GapValidation& v) {

@@ -9,6 +9,10 @@
 /// Schedule (cycle of 20 cases): 2 effect-free, the 7 effects alone at Clear
 /// strength, the 7 alone at Subtle strength, 4 pairs of distinct effects
 /// (drawn at random, Clear). Case i uses seed (seed · 1000003 + i).
+/// Families (gap_cases.hpp): classic (the default), structure (every case
+/// from the structure family: lightly damped many-mode structures, noise
+/// rising with frequency, the nonlinearity a spring in the loop), or mixed
+/// (cycles of 20 alternate: classic, structure, classic, …).
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -21,8 +25,14 @@
 
 namespace fdsid {
 
+enum class GapFamily { Classic, Structure, Mixed };
+
+/// "classic", "structure", "mixed".
+const char* to_string(GapFamily family);
+
 struct GapValidationOptions {
   int cases = 100;
+  GapFamily family = GapFamily::Classic;
   std::uint64_t seed = 1;
   int period = 1024, periods = 8;
   std::string workdir;  ///< where the case files go (created; removed afterwards unless keep_files)
