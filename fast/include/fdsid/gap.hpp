@@ -31,7 +31,9 @@
 ///    F = ((V₀ − V₁)/q) / (V₁/(2K − q_total)) ~ F(q, 2K − q_total) (V the
 ///    variance-weighted residual sum, q the effect's real parameters), which
 ///    compares the reduction with the misfit that remains rather than with the
-///    noise alone, and by a relevance rule (it must remove a stated share of
+///    noise alone (for unmodelled_mode and mode_mismatch corrected by Šidák,
+///    1 − (1 − p)^N, for the N frequencies or model modes searched), and by a
+///    relevance rule (it must remove a stated share of
 ///    the current excess gap − 1).
 /// Selection: forward, every stage refitted jointly from the model as given
 /// and admitted by its effect's test on that joint fit; no stage may raise the
