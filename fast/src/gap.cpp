@@ -1,13 +1,16 @@
 #include "fdsid/gap.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <boost/math/distributions/students_t.hpp>
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <future>
 #include <map>
+#include <memory>
 #include <optional>
 #include <numeric>
 #include <tuple>
@@ -402,7 +405,7 @@ double weighted_ls(const std::vector<Eigen::VectorXcd>& Phi, const Eigen::Vector
 // diagnosis runs on one thread.
 class Diagnosis {
  public:
-  Diagnosis(const StateSpace& model, const Spectra& s) : model_(model), s_(s), fft_(s.P) {
+  Diagnosis(const StateSpace& model, const Spectra& s) : model_(model), s_(s) {
     penalty_ = 0.5 * std::log(2.0 * s.exc.size());
   }
 
@@ -803,7 +806,7 @@ class Diagnosis {
     a.nl.resize(0, 0);
     const Eigen::VectorXcd G = a.G();
     const int L = static_cast<int>(s_.xi.size());
-    Fft& fft = fft_;
+    Fft& fft = this_thread_fft();
     std::vector<int> lines = s_.exc;
     lines.insert(lines.end(), s_.ne.begin(), s_.ne.end());
     const LineStats st = line_stats(s_, a, lines);
@@ -828,7 +831,9 @@ class Diagnosis {
                                                   : y_mean;
         scale = std::max(scale, x.cwiseAbs().maxCoeff());
         for (int d = 0; d < q; ++d) {
-          Eigen::VectorXcd F = fft.forward(x.array().pow(degrees[d]).matrix());
+          Eigen::VectorXd xd = x;  // x^degree by products (std::pow was a tenth of a diagnosis)
+          for (int e = 1; e < degrees[d]; ++e) xd.array() *= x.array();
+          Eigen::VectorXcd F = fft.forward(xd);
           if (form == Input) F = F.cwiseProduct(G);
           if (form == InLoop) F = -F.cwiseProduct(G);
           Q[d].row(l) = F.transpose();
@@ -940,12 +945,20 @@ class Diagnosis {
     return boost::math::cdf(boost::math::complement(boost::math::students_t(J - 1), T));
   }
 
+  // FFTW plans of length P for the calling thread, made once per thread and
+  // length (fit_nonlinearity runs for every candidate set, and the forward
+  // selection tries candidates on two threads; FFTW's planner is serialised
+  // in numerics/fft.cpp, executing plans is thread-safe, the buffers are not
+  // shared).
+  Fft& this_thread_fft() const {
+    thread_local std::unique_ptr<Fft> fft;
+    if (!fft || fft->size() != s_.P) fft = std::make_unique<Fft>(s_.P);
+    return *fft;
+  }
+
   const StateSpace& model_;
   const Spectra& s_;
   double penalty_ = 0;
-  // FFTW plans of length P, made once per diagnosis (fit_nonlinearity runs for
-  // every candidate set); one diagnosis runs on one thread.
-  mutable Fft fft_;
 };
 
 Spectra spectra_of(const Eigen::MatrixXd& record, const RecordMeta& meta, Domain domain) {
@@ -1179,16 +1192,26 @@ void gap_bands(const Spectra& s, const LineStats& st0, double fdr, GapReport& re
 // effect; the nonlinearity test for the nonlinearity).
 std::vector<EffectFit> fits_alone(const Diagnosis& dg, const Spectra& s, const Augment& a0, double V0,
                                   double p_nonlinearity) {
-  std::vector<EffectFit> fits;
-  for (Effect e : kLinearEffects) {
+  const auto linear_fit = [&](Effect e) {
     Trial t = dg.fit(e, a0);
     t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
     t.fit.p_value = dg.searched_p(e, dg.f_test(V0, line_stats(s, t.state, s.exc).pooled_cost, t.fit.dof, t.fit.dof));
-    fits.push_back(t.fit);
-  }
+    return t.fit;
+  };
+  // The two mode fits (most of the work) on a second thread; the others and
+  // the nonlinearity (the one user of the FFT plans) on this one. Each fit
+  // depends on a0 alone, so the results do not depend on the split.
+  auto modes = std::async(std::launch::async, [&] {
+    return std::vector<EffectFit>{linear_fit(Effect::UnmodelledMode), linear_fit(Effect::ModeMismatch)};
+  });
+  std::vector<EffectFit> fits;
+  for (Effect e : kLinearEffects)
+    if (e != Effect::UnmodelledMode && e != Effect::ModeMismatch) fits.push_back(linear_fit(e));
   Trial t = dg.fit_nonlinearity(a0);
   t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
   t.fit.p_value = p_nonlinearity;
+  std::vector<EffectFit> m = modes.get();
+  fits.insert(fits.begin() + 3, m.begin(), m.end());  // kLinearEffects' order, then the nonlinearity
   fits.push_back(t.fit);
   return fits;
 }
@@ -1277,8 +1300,20 @@ class ForwardSelection {
       // its test while another explains the data better is not taken);
       // leakage and nonlinearity by their own tests.
       std::optional<Stage> best, best_linear;
-      for (Effect e : kAllEffects) {
-        std::optional<Stage> next = admit(cur, e);
+      // Every candidate refitted on `cur` (independent of each other) by two
+      // workers taking the next untried one; the choice below runs in
+      // kAllEffects' order, so the result does not depend on who did which.
+      std::array<std::optional<Stage>, kAllEffects.size()> tried;
+      std::atomic<size_t> next_index{0};
+      const auto worker = [&] {
+        for (size_t i; (i = next_index++) < kAllEffects.size();) tried[i] = admit(cur, kAllEffects[i]);
+      };
+      auto second = std::async(std::launch::async, worker);
+      worker();
+      second.get();
+      for (size_t i = 0; i < kAllEffects.size(); ++i) {
+        const Effect e = kAllEffects[i];
+        std::optional<Stage> next = std::move(tried[i]);
         if (!next) continue;
         if (stage == 0 && next->admitted && (!best_single || next->gap < best_single->gap)) best_single = next;
         if (is_linear(e)) {
