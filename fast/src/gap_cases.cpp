@@ -572,20 +572,28 @@ json bands_json(const std::vector<std::array<double, 2>>& b) {
 }
 
 // ---------------------------------------------------------------------------
-Base draw_system(Draw& d, double w_lo, double w_hi) {
-  Base b;
-  const int n = d.integer(2, 4);
+// n resonances spread one per log-spaced slot of [w_lo, w_hi], ζ log-uniform
+// on [zeta_lo, zeta_hi], peak gains within a factor 10 of `overall`,
+// near-quadrature residues (step 1 of gap_cases.hpp). Draws per mode: slot
+// position, ζ, peak, sign, phase.
+void draw_modes(Draw& d, Base& b, int n, double w_lo, double w_hi, double overall, double zeta_lo, double zeta_hi) {
   const double l0 = std::log(w_lo), l1 = std::log(w_hi);
-  const double overall = std::pow(10.0, d.uniform(-1, 1));
   for (int i = 0; i < n; ++i) {
     Mode m;
     m.omega = std::exp(l0 + (l1 - l0) * (i + d.uniform(0.15, 0.85)) / n);
-    m.zeta = d.log_uniform(0.01, 0.2);
+    m.zeta = d.log_uniform(zeta_lo, zeta_hi);
     const double peak = overall * d.log_uniform(0.3, 3.0);
     const cplx p = m.pole();
     m.residue = d.sign() * peak * (1 - std::abs(p)) * std::polar(1.0, -kPi / 2 + d.uniform(-0.4, 0.4));
     b.modes.push_back(m);
   }
+}
+
+Base draw_system(Draw& d, double w_lo, double w_hi) {
+  Base b;
+  const int n = d.integer(2, 4);
+  const double overall = std::pow(10.0, d.uniform(-1, 1));
+  draw_modes(d, b, n, w_lo, w_hi, overall, 0.01, 0.2);
   if (d.coin()) {
     b.has_real = true;
     b.real_pole = std::exp(-d.log_uniform(0.5 * w_lo, 2 * w_hi));
@@ -600,17 +608,7 @@ Base draw_system(Draw& d, double w_lo, double w_hi) {
 Base draw_structure(Draw& d, double w_lo, double w_hi) {
   Base b;
   const int n = d.integer(5, 8);
-  const double l0 = std::log(w_lo), l1 = std::log(w_hi);
-  const double overall = std::pow(10.0, d.uniform(-1, 1));
-  for (int i = 0; i < n; ++i) {
-    Mode m;
-    m.omega = std::exp(l0 + (l1 - l0) * (i + d.uniform(0.15, 0.85)) / n);
-    m.zeta = d.log_uniform(0.005, 0.05);
-    const double peak = overall * d.log_uniform(0.3, 3.0);
-    const cplx p = m.pole();
-    m.residue = d.sign() * peak * (1 - std::abs(p)) * std::polar(1.0, -kPi / 2 + d.uniform(-0.4, 0.4));
-    b.modes.push_back(m);
-  }
+  draw_modes(d, b, n, w_lo, w_hi, std::pow(10.0, d.uniform(-1, 1)), 0.005, 0.05);
   return b;
 }
 
