@@ -533,6 +533,13 @@ TEST(GapDiagnosis, TwoOutputsASensorDelayOnOne) {
   EXPECT_EQ(n.verdict, GapVerdict::NoGap);
   EXPECT_GE(n.p_joint, 0.01);
   EXPECT_TRUE(n.present.empty());
+  // The same output twice: no joint test (a singular covariance), said in a note.
+  Eigen::MatrixXd twice(r1.rows(), 3);
+  twice << r1.col(0), r1.col(1), r1.col(1);
+  const MultiGapReport t = diagnose_gap_outputs(two, twice, 1, meta);
+  EXPECT_FALSE(t.joint_tested);
+  ASSERT_FALSE(t.notes.empty());
+  EXPECT_NE(t.notes.back().find("linearly dependent"), std::string::npos);
   // Refused: a model with another number of outputs, several inputs, one output.
   EXPECT_THROW(diagnose_gap_outputs(g, record(right), 1, meta), Error);
   EXPECT_THROW(diagnose_gap_outputs(two, record(right), 2, meta), Error);

@@ -1211,6 +1211,7 @@ std::vector<EffectFit> fits_alone(const Diagnosis& dg, const Spectra& s, const A
   t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
   t.fit.p_value = p_nonlinearity;
   std::vector<EffectFit> m = modes.get();
+  static_assert(kLinearEffects[3] == Effect::UnmodelledMode && kLinearEffects[4] == Effect::ModeMismatch);
   fits.insert(fits.begin() + 3, m.begin(), m.end());  // kLinearEffects' order, then the nonlinearity
   fits.push_back(t.fit);
   return fits;
@@ -1687,6 +1688,11 @@ void joint_test(const StateSpace& model, const Eigen::MatrixXd& record, const Re
   const std::vector<int>& exc = sp[0].exc;
   const boost::math::fisher_f law(2.0 * p, 2.0 * (M - p));
   double chi = 0, sumF = 0;
+  const auto dependent = [&](int k) {
+    rep.notes.push_back("joint test of the " + std::to_string(p) + " outputs not computed: their residuals are "
+                        "linearly dependent at line " + std::to_string(k) + " (an output given twice, or one "
+                        "a combination of the others)");
+  };
   for (int k : exc) {
     Eigen::MatrixXcd E(M, p);
     for (int o = 0; o < p; ++o)
@@ -1694,7 +1700,13 @@ void joint_test(const StateSpace& model, const Eigen::MatrixXd& record, const Re
     const Eigen::RowVectorXcd mean = E.colwise().mean();
     const Eigen::MatrixXcd D = E.rowwise() - mean;
     const Eigen::MatrixXcd S = D.adjoint() * D / static_cast<double>(M - 1);
+    // S positive definite unless the residuals are dependent: a pivot below
+    // numerics::kNegligibleRelative of the largest (rounding of a copied
+    // column) means no usable covariance.
     const Eigen::LDLT<Eigen::MatrixXcd> ldlt(S);
+    const Eigen::VectorXd piv = ldlt.vectorD().real();
+    if (ldlt.info() != Eigen::Success || !(piv.minCoeff() > numerics::kNegligibleRelative * piv.maxCoeff()))
+      return dependent(k);
     const double T2 = M * (mean * ldlt.solve(mean.adjoint()))(0, 0).real();
     const double F = (M - p) / (p * (M - 1.0)) * T2;
     sumF += F;
