@@ -407,7 +407,15 @@ class Diagnosis {
  public:
   Diagnosis(const StateSpace& model, const Spectra& s) : model_(model), s_(s) {
     penalty_ = 0.5 * std::log(2.0 * s.exc.size());
+    if (model.order() > 0) {  // the resonances mode_mismatch may move (one per conjugate pair)
+      const Eigen::EigenSolver<Eigen::MatrixXd> es(model.A, false);
+      for (Eigen::Index i = 0; i < es.eigenvalues().size(); ++i) resonances_ += es.eigenvalues()(i).imag() > 0;
+    }
   }
+
+  // The unmodelled_mode grid visits every grid_step()-th excited line (at most
+  // ~300 frequencies; fit_pole).
+  int grid_step() const { return std::max<int>(1, static_cast<int>(s_.exc.size()) / 300); }
 
   Augment initial() const {
     Augment a;
@@ -448,15 +456,8 @@ class Diagnosis {
   // 2 false alarms of 30).
   double searched_p(Effect effect, double p) const {
     double N = 1;
-    if (effect == Effect::UnmodelledMode) {
-      const int step = std::max<int>(1, static_cast<int>(s_.exc.size()) / 300);
-      N = std::ceil(static_cast<double>(s_.exc.size()) / step);
-    } else if (effect == Effect::ModeMismatch) {
-      Eigen::EigenSolver<Eigen::MatrixXd> es(model_.A, false);
-      N = 0;
-      for (Eigen::Index i = 0; i < es.eigenvalues().size(); ++i) N += es.eigenvalues()(i).imag() > 0;
-      N = std::max(1.0, N);
-    }
+    if (effect == Effect::UnmodelledMode) N = std::ceil(static_cast<double>(s_.exc.size()) / grid_step());
+    if (effect == Effect::ModeMismatch) N = std::max(1, resonances_);
     return N == 1 ? p : -std::expm1(N * std::log1p(-std::min(p, 1.0 - 1e-16)));
   }
 
@@ -668,7 +669,7 @@ class Diagnosis {
       if (th > 0 && sg > 0) x0.emplace_back(th, std::log(sg));
     }
     if (grid) {  // resonances at the excited frequencies, damping ratios 0.003 … 0.3
-      const int step = std::max<int>(1, static_cast<int>(s_.exc.size()) / 300);
+      const int step = grid_step();
       Eigen::Vector2d gbest(0, 0);
       double jbest = std::numeric_limits<double>::infinity();
       for (size_t i = 0; i < s_.exc.size(); i += step)
@@ -959,6 +960,7 @@ class Diagnosis {
   const StateSpace& model_;
   const Spectra& s_;
   double penalty_ = 0;
+  int resonances_ = 0;  // complex-conjugate pole pairs of the model
 };
 
 Spectra spectra_of(const Eigen::MatrixXd& record, const RecordMeta& meta, Domain domain) {
@@ -1147,7 +1149,7 @@ void distortion_view(const Spectra& s, const Augment& a0, const LineStats& st0, 
     var += pred * pred;
   }
   var += c.cwiseProduct(level).squaredNorm();
-  const double dd = 2.0 * s.M - 2, cv = std::sqrt(dd / (dd - 4));
+  const double cv = gap_null_sd(s.M, 1);  // √(var F(2, d)) / mean F(2, d) = √(d/(d − 4))
   const double Z = (sum_t - sum_pred) / (cv * std::sqrt(var));
   d.p_beyond = std::isfinite(Z) ? 0.5 * std::erfc(Z / std::sqrt(2.0)) : 1.0;
   d.bla_right = rep.p_gap < rep.options.alpha && d.p_detected < rep.options.alpha && d.p_beyond >= rep.options.alpha;
@@ -1187,33 +1189,36 @@ void gap_bands(const Spectra& s, const LineStats& st0, double fdr, GapReport& re
   }
 }
 
+// Runs task(0) … task(n − 1) on two workers, each taking the next untried
+// index; the tasks must be independent (each writes its own result). Used
+// where a diagnosis fits independent candidates: the results, and so the
+// report, do not depend on which worker ran which.
+void on_two_workers(size_t n, const std::function<void(size_t)>& task) {
+  std::atomic<size_t> next{0};
+  const auto worker = [&] {
+    for (size_t i; (i = next++) < n;) task(i);
+  };
+  auto second = std::async(std::launch::async, worker);
+  worker();
+  second.get();
+}
+
 // Every linear effect and the nonlinearity, each alone on the model as given:
 // gap after, and p-value (the F-test against the pooled cost V0 for a linear
 // effect; the nonlinearity test for the nonlinearity).
 std::vector<EffectFit> fits_alone(const Diagnosis& dg, const Spectra& s, const Augment& a0, double V0,
                                   double p_nonlinearity) {
-  const auto linear_fit = [&](Effect e) {
-    Trial t = dg.fit(e, a0);
-    t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
-    t.fit.p_value = dg.searched_p(e, dg.f_test(V0, line_stats(s, t.state, s.exc).pooled_cost, t.fit.dof, t.fit.dof));
-    return t.fit;
-  };
-  // The two mode fits (most of the work) on a second thread; the others and
-  // the nonlinearity (the one user of the FFT plans) on this one. Each fit
-  // depends on a0 alone, so the results do not depend on the split.
-  auto modes = std::async(std::launch::async, [&] {
-    return std::vector<EffectFit>{linear_fit(Effect::UnmodelledMode), linear_fit(Effect::ModeMismatch)};
+  // kLinearEffects' fits, then the nonlinearity's; independent of each other.
+  std::vector<EffectFit> fits(kLinearEffects.size() + 1);
+  on_two_workers(fits.size(), [&](size_t i) {
+    const bool linear = i < kLinearEffects.size();
+    const Trial t = linear ? dg.fit(kLinearEffects[i], a0) : dg.fit_nonlinearity(a0);
+    const LineStats ls = line_stats(s, t.state, s.exc);
+    fits[i] = t.fit;
+    fits[i].gap_after = gap_of(ls);
+    fits[i].p_value =
+        linear ? dg.searched_p(kLinearEffects[i], dg.f_test(V0, ls.pooled_cost, t.fit.dof, t.fit.dof)) : p_nonlinearity;
   });
-  std::vector<EffectFit> fits;
-  for (Effect e : kLinearEffects)
-    if (e != Effect::UnmodelledMode && e != Effect::ModeMismatch) fits.push_back(linear_fit(e));
-  Trial t = dg.fit_nonlinearity(a0);
-  t.fit.gap_after = gap_of(line_stats(s, t.state, s.exc));
-  t.fit.p_value = p_nonlinearity;
-  std::vector<EffectFit> m = modes.get();
-  static_assert(kLinearEffects[3] == Effect::UnmodelledMode && kLinearEffects[4] == Effect::ModeMismatch);
-  fits.insert(fits.begin() + 3, m.begin(), m.end());  // kLinearEffects' order, then the nonlinearity
-  fits.push_back(t.fit);
   return fits;
 }
 
@@ -1305,13 +1310,7 @@ class ForwardSelection {
       // workers taking the next untried one; the choice below runs in
       // kAllEffects' order, so the result does not depend on who did which.
       std::array<std::optional<Stage>, kAllEffects.size()> tried;
-      std::atomic<size_t> next_index{0};
-      const auto worker = [&] {
-        for (size_t i; (i = next_index++) < kAllEffects.size();) tried[i] = admit(cur, kAllEffects[i]);
-      };
-      auto second = std::async(std::launch::async, worker);
-      worker();
-      second.get();
+      on_two_workers(tried.size(), [&](size_t i) { tried[i] = admit(cur, kAllEffects[i]); });
       for (size_t i = 0; i < kAllEffects.size(); ++i) {
         const Effect e = kAllEffects[i];
         std::optional<Stage> next = std::move(tried[i]);

@@ -79,16 +79,20 @@ std::uint64_t splitmix64(std::uint64_t x) {
 struct Section {
   double b0 = 1, b1 = 0, b2 = 0, a1 = 0, a2 = 0;
   cplx at(cplx q) const { return (b0 + q * (b1 + q * b2)) / (1.0 + q * (a1 + q * a2)); }
-  // y = H x from rest (direct form II transposed).
+  // One sample of direct form II transposed: the output for input x from the
+  // state w = (w1, w2), which is advanced. With b0 = 0 the output is w1 before
+  // the input is known.
+  double step(double x, std::array<double, 2>& w) const {
+    const double y = b0 * x + w[0];
+    w[0] = b1 * x - a1 * y + w[1];
+    w[1] = b2 * x - a2 * y;
+    return y;
+  }
+  // y = H x from rest.
   void filter(const std::vector<double>& x, std::vector<double>& y) const {
-    double w1 = 0, w2 = 0;
+    std::array<double, 2> w = {0.0, 0.0};
     y.resize(x.size());
-    for (std::size_t t = 0; t < x.size(); ++t) {
-      const double xt = x[t], yt = b0 * xt + w1;
-      w1 = b1 * xt - a1 * yt + w2;
-      w2 = b2 * xt - a2 * yt;
-      y[t] = yt;
-    }
+    for (std::size_t t = 0; t < x.size(); ++t) y[t] = step(x[t], w);
   }
 };
 
@@ -222,23 +226,11 @@ struct Chain {
     for (std::size_t t = 0; t < x.size(); ++t) {
       double yt = 0;
       for (std::size_t i = 0; i < np; ++i) yt += w[i][0];  // b0 = 0: the output is w1
-      for (std::size_t i = 0; i < series.size(); ++i) {
-        const Section& s = series[i];
-        std::array<double, 2>& ws = w[np + i];
-        const double in = yt;
-        yt = s.b0 * in + ws[0];
-        ws[0] = s.b1 * in - s.a1 * yt + ws[1];
-        ws[1] = s.b2 * in - s.a2 * yt;
-      }
+      for (std::size_t i = 0; i < series.size(); ++i) yt = series[i].step(yt, w[np + i]);
       if (!(std::abs(yt) <= bound)) return false;
       y[t] = yt;
       const double v = x[t] - (loop_nl(yt) - yt);
-      for (std::size_t i = 0; i < np; ++i) {
-        const Section& s = parallel[i];
-        const double out = w[i][0];
-        w[i][0] = s.b1 * v - s.a1 * out + w[i][1];
-        w[i][1] = s.b2 * v - s.a2 * out;
-      }
+      for (std::size_t i = 0; i < np; ++i) parallel[i].step(v, w[i]);  // advances the state; its output was w1
     }
     return true;
   }
