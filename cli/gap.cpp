@@ -281,7 +281,7 @@ void register_gap_validate(CLI::App& app, Action& chosen) {
                          "is not a family (classic, structure, mixed)"));
   gval->add_option("--threads", o.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
   gval->add_option("--workdir", o.workdir, "write the cases' files here (default: a temporary directory)");
-  gval->add_flag("--keep-files", o.keep_files, "keep each case's model.json, data.csv, meta.json");
+  gval->add_flag("--keep-files", o.keep_files, "keep each case's model.json, data.csv, meta.json and truth.json (the withheld effects, written beside them; the diagnosis reads the first three only)");
   add_json_option(gval, c->json_path, "write the scores here (- = stdout)");
   on_parsed(gval, c, chosen, run_gap_validate);
 }

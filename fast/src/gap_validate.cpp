@@ -79,6 +79,8 @@ GapValidationCase run_case(const GapValidationOptions& o, int i, const std::file
   write_text_file(model_path, model_to_json(c.sim_model).dump(2) + "\n");
   write_text_file(data_path, records_csv(c.record));
   write_text_file(meta_path, meta_to_json(c.meta).dump() + "\n");
+  // The withheld truth, for a user who keeps the files (never read below).
+  if (o.keep_files) write_text_file((d / "truth.json").string(), c.truth.dump(2) + "\n");
   try {  // the diagnosis: the three files only
     const StateSpace model = read_model(model_path);
     int inputs = 0;

@@ -36,7 +36,7 @@ struct GapValidationOptions {
   std::uint64_t seed = 1;
   int period = 1024, periods = 8;
   std::string workdir;  ///< where the case files go (created; removed afterwards unless keep_files)
-  bool keep_files = false;
+  bool keep_files = false;  ///< keep the case files, and each case's truth.json (the withheld truth)
   int threads = 0;      ///< 0: hardware concurrency
   GapOptions gap;
   std::function<void(int done, int total)> progress;  ///< called from the worker threads, serialised
