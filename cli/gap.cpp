@@ -90,7 +90,9 @@ std::string distortion_line(const GapReport& r) {
       d.level_db ? "distortion " + fmt(*d.level_db, 3) + " dB above the noise of the mean" : "no distortion above the noise";
   std::string line = "distortion (best linear approximation view, " + which + "): gap " + sci(d.gap) + " there, " +
                      level + " (p " + p_text(d.p_detected) + "), " + std::to_string(std::lround(100 * d.share)) +
-                     " % of the excess gap; excited lines beyond it: p " + p_text(d.p_beyond);
+                     " % of the excess gap; excited lines beyond it: p " +
+                     (d.p_beyond <= d.p_beyond_min ? "<= " + sci(d.p_beyond_min, 2) + " (the Monte Carlo's floor)"
+                                                   : p_text(d.p_beyond));
   if (d.bla_right)
     line += " - the model is right as a best linear approximation: the gap is nonlinear distortion" +
             (d.level_db ? " " + fmt(*d.level_db, 3) + " dB above the noise" : std::string());

@@ -201,10 +201,14 @@ struct GapDistortion {
   double p_detected = 1;         ///< Fisher's combination over the detection lines (distortion present?)
   /// Is the excited lines' gap larger than the distortion predicts? Each
   /// excited line's t against the mean t of its 4 nearest detection lines
-  /// (the distortion level changes with frequency), the sums compared by a
-  /// normal approximation with the F(2, 2M−2) coefficient of variation
-  /// √(d/(d−4)), d = 2M − 2, for every t (scaled F variates); one-sided.
+  /// (the distortion level changes with frequency), the sums' standardised
+  /// difference Z against its null law by Monte Carlo (every t an independent
+  /// F(2, 2M−2) variate at one level; 2000 draws, fixed seed, p ≥ 1/2001);
+  /// one-sided.
   double p_beyond = 1;
+  /// The smallest p_beyond the Monte Carlo can give, 1/2001 (none of its
+  /// draws reached the statistic); 0 when the normal tail was used.
+  double p_beyond_min = 0;
   /// The gap is significant, the distortion is detected, and the excited
   /// lines show no more than it (p_beyond ≥ alpha): the model is right as a
   /// best linear approximation and the gap is nonlinear distortion.
