@@ -1440,8 +1440,12 @@ class ForwardSelection {
   // The stages taken, from the model as given (stage 0) to the chosen set;
   // `best_single`: of the effects admitted alone (stage 1), the one leaving
   // the least gap.
-  std::vector<Stage> run(std::optional<Stage>& best_single) const {
+  // `alternatives`: see GapReport::alternatives, for the stage-1 linear
+  // effect, from the fits the selection made anyway (each effect alone at
+  // stage 1, each added to it at stage 2).
+  std::vector<Stage> run(std::optional<Stage>& best_single, std::vector<std::pair<Effect, double>>& alternatives) const {
     std::vector<Stage> path{evaluate(Stage{})};
+    std::array<std::optional<Stage>, kAllEffects.size()> alone;
     for (int stage = 0; stage < 4; ++stage) {
       const Stage& cur = path.back();
       // Of the linear effects only the best by the criterion is put to the
@@ -1454,6 +1458,9 @@ class ForwardSelection {
       // kAllEffects' order, so the result does not depend on who did which.
       std::array<std::optional<Stage>, kAllEffects.size()> tried;
       on_two_workers(tried.size(), [&](size_t i) { tried[i] = admit(cur, kAllEffects[i]); });
+      if (stage == 0) alone = tried;
+      if (stage == 1 && cur.linear.size() == 1 && cur.first == 0 && !cur.nonlinear)
+        alternatives = equivalents(cur.linear[0], alone, tried);
       for (size_t i = 0; i < kAllEffects.size(); ++i) {
         const Effect e = kAllEffects[i];
         std::optional<Stage> next = std::move(tried[i]);
@@ -1518,6 +1525,29 @@ class ForwardSelection {
     for (EffectFit& f : next.fits)
       if (f.effect() == e) f.p_value = p;
     return next;
+  }
+
+  // The linear effects g that explain the data as well as e: g admitted
+  // alone, its Schwarz criterion within 1 of e's (in units of V, a log Bayes
+  // factor: 2 ln B ≤ 2, "not worth more than a bare mention" on Kass and
+  // Raftery's scale — so a richer effect that merely nests e, a mode whose
+  // constant term is a gain, is no alternative to it), and e added to g (the
+  // pair fitted at stage 2) not significant.
+  std::vector<std::pair<Effect, double>> equivalents(Effect e, const std::array<std::optional<Stage>, kAllEffects.size()>& alone,
+                                                     const std::array<std::optional<Stage>, kAllEffects.size()>& pairs) const {
+    std::vector<std::pair<Effect, double>> out;
+    const auto ie = static_cast<size_t>(std::find(kAllEffects.begin(), kAllEffects.end(), e) - kAllEffects.begin());
+    if (ie >= kAllEffects.size() || !alone[ie]) return out;
+    const double K = static_cast<double>(s_.exc.size());
+    for (size_t i = 0; i < kAllEffects.size(); ++i) {
+      const Effect g = kAllEffects[i];
+      if (g == e || !is_linear(g) || !alone[i] || !alone[i]->admitted || !pairs[i]) continue;
+      if ((score(*alone[i]) - score(*alone[ie])) * K > 1) continue;
+      const Stage& pair = *pairs[i];
+      const double p = dg_.f_test(alone[i]->V, pair.V, std::max(1, pair.q - alone[i]->q), pair.q);
+      if (p >= o_.effect_alpha) out.emplace_back(g, p);
+    }
+    return out;
   }
 
   // Stepwise exchange after an addition `next` to `cur`: each earlier linear
@@ -1653,7 +1683,8 @@ Augment choose_effects(const Diagnosis& dg, const Spectra& s, const Augment& a0,
                        GapReport& rep) {
   const ForwardSelection sel(dg, s, a0, drop, options);
   std::optional<Stage> best_single;
-  std::vector<Stage> path = sel.run(best_single);
+  std::vector<std::pair<Effect, double>> alternatives;
+  std::vector<Stage> path = sel.run(best_single, alternatives);
   if (best_single && best_single->gap < path.back().gap - sel.floor()) {
     rep.notes.push_back("the forward selection left gap " +
                         sci(path.back().gap, 4) + ", more than " + std::string(to_string(best_single->fits[0].effect())) +
@@ -1684,6 +1715,10 @@ Augment choose_effects(const Diagnosis& dg, const Spectra& s, const Augment& a0,
     if (i > 0) rep.path.push_back(step);
   }
   rep.chosen = path.back().fits;
+  // Alternatives only when the final set's one linear effect is stage 1's.
+  const Stage& last = path.back();
+  if (path.size() >= 2 && last.linear.size() == 1 && path[1].linear.size() == 1 && path[1].linear[0] == last.linear[0])
+    rep.alternatives = alternatives;
   return path.back().state;
 }
 
@@ -1796,6 +1831,8 @@ nlohmann::json gap_report_to_json(const GapReport& r) {
     j["steps"].push_back(
         {{"added", to_string(st.added)}, {"set", set}, {"gap_after", st.gap_after}, {"p_value", st.p_value}});
   }
+  j["alternatives"] = nlohmann::json::array();
+  for (const auto& [e, p] : r.alternatives) j["alternatives"].push_back({{"effect", to_string(e)}, {"p_value", p}});
   j["candidates"] = nlohmann::json::array();
   for (const EffectFit& f : r.candidates) j["candidates"].push_back(fit_json(f));
   j["chosen"] = nlohmann::json::array();

@@ -230,6 +230,13 @@ struct GapReport {
   std::vector<std::array<double, 2>> bands;        ///< Hz (cycles/sample when Ts = 1)
   std::vector<EffectFit> candidates;               ///< every effect tried alone, best first
   std::vector<EffectFit> chosen;                   ///< the present ones, as fitted jointly (greedy order)
+  /// When one linear effect e is present: the other linear effects g that
+  /// explain the record as well — g alone passed its own test, its Schwarz
+  /// criterion is within 1 of e's (2 ln B ≤ 2), and adding e to g is not
+  /// significant (F-test at effect_alpha), so the data cannot tell e from g
+  /// (a delay and a high-cut-off low-pass, say). With the p-value of adding
+  /// e to g.
+  std::vector<std::pair<Effect, double>> alternatives;
   int periods_used = 0;                            ///< M after dropping transient periods
   int excited = 0, unexcited = 0;                  ///< lines in each test
   double p_gap = 1, p_nonlinearity = 1, p_leakage = 1;  ///< detection tests on the model as given

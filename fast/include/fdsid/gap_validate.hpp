@@ -48,6 +48,10 @@ struct GapValidationCase {
   std::string category;   ///< "none", "clear", "subtle", "pair"
   std::string truth, verdict;  ///< effect sets joined by "+", "none" when empty
   bool correct = false;
+  /// correct, or the verdict with its one linear effect replaced by one of the
+  /// report's alternatives (GapReport::alternatives: indistinguishable on
+  /// the record) is the truth
+  bool correct_up_to_alternatives = false;
   double gap_before = 0, gap_after = 0;
   int truth_bands = 0, bands_hit = 0;  ///< truth bands overlapped by a reported band
   std::string error;      ///< the diagnosis refused the case (counted as wrong)
@@ -58,11 +62,16 @@ struct GapValidation {
   double accuracy = 0;  ///< exact verdict sets, all cases
   std::map<std::string, std::map<std::string, int>> confusion;  ///< truth → verdict → count
   std::map<std::string, std::array<int, 2>> by_category;        ///< category → {correct, total}
+  std::map<std::string, int> correct_up_to_alternatives;         ///< category → cases (GapValidationCase)
   double false_alarm_rate = 0;  ///< effect-free cases with a non-empty verdict
   double band_hit_rate = 0;     ///< truth bands hit / truth bands, over cases with effects
   std::vector<double> gap_after_correct;  ///< sorted, correct verdicts with effects
   std::vector<GapValidationCase> rows;
 };
+
+/// Issue 17's targets: clear single effects ≥ 0.99, subtle singles and pairs
+/// ≥ 0.90, false alarms ≤ 0.02, gap_after ≤ 2 on every correct verdict.
+inline constexpr double kTargetClear = 0.99, kTargetSubtleOrPair = 0.90, kTargetFalseAlarms = 0.02;
 
 GapValidation validate_gap(const GapValidationOptions& options);
 
