@@ -1215,9 +1215,10 @@ void detection_tests(const Diagnosis& dg, const Spectra& s, const Augment& a0, c
 // is scale-free, so its null law depends only on d and the lines' layout:
 // p_beyond is its Monte Carlo tail, kBlaDraws draws of every line's t as
 // F(2, d) at level 1 (fixed seed: the same record, the same p), (1 + #{Z_b ≥
-// Z}) / (kBlaDraws + 1). A normal approximation of Z was liberal: 3 of 40
+// Z}) / (kBlaDraws + 1). A normal approximation of Z was liberal: 26 of 300
 // right BLAs rejected at alpha 0.01 (12 detection lines, M = 8: the F(2, 14)
-// tails are heavy). kBlaDraws = 2000: p resolution 5e-4, Monte Carlo
+// tails are heavy); this null, 10 of 300 (GapDiagnosis.DistortionAround…'s
+// comment says why not 3). kBlaDraws = 2000: p resolution 5e-4, Monte Carlo
 // standard error at p = 0.01 of √(0.01 · 0.99 / 2000) = 0.0022.
 // With more than kBlaLines lines in all the draws would cost more than the
 // rest of a diagnosis (≈ 30 ns per line and draw), and the normal law is then
