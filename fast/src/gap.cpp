@@ -806,14 +806,18 @@ class Diagnosis {
       Xs(i) = G(s_.exc[i]) * W.U(i);
       Rs(i) = W.T(i);
     }
+    const auto in_parallel = [this](Augment& s, cplx l, const Eigen::VectorXd& c) {
+      s.add[Effect::UnmodelledMode] = mode_response(l, c);
+    };
+    const auto in_series = [this](Augment& s, cplx l, const Eigen::VectorXd& c) {
+      s.mult[Effect::UnmodelledMode] = mode_response(l, c);
+    };
     std::vector<cplx> starts;
     const UnmodelledMode* prev = warm ? std::get_if<UnmodelledMode>(&warm->parameters) : nullptr;
     if (prev && prev->mode) {  // a descent round: the previous resonance refined, its connection kept
       starts.push_back(pole_of(*prev->mode));
-      Trial t = prev->series ? fit_pole(a, Effect::UnmodelledMode, Xs, Rs, true, starts, true, false,
-                                        [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.mult[Effect::UnmodelledMode] = mode_response(l, c); })
-                             : fit_pole(a, Effect::UnmodelledMode, Xp, Rp, true, starts, true, false,
-                                        [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.add[Effect::UnmodelledMode] = mode_response(l, c); });
+      Trial t = prev->series ? fit_pole(a, Effect::UnmodelledMode, Xs, Rs, true, starts, true, false, in_series)
+                             : fit_pole(a, Effect::UnmodelledMode, Xp, Rp, true, starts, true, false, in_parallel);
       std::get<UnmodelledMode>(t.fit.parameters).series = prev->series;
       return t;
     }
@@ -833,10 +837,8 @@ class Diagnosis {
     } catch (const Error&) {
       // the subspace start is optional; the grid still runs
     }
-    Trial par = fit_pole(a, Effect::UnmodelledMode, Xp, Rp, true, starts, true, true,
-                         [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.add[Effect::UnmodelledMode] = mode_response(l, c); });
-    Trial ser = fit_pole(a, Effect::UnmodelledMode, Xs, Rs, true, starts, true, true,
-                         [this](Augment& s, cplx l, const Eigen::VectorXd& c) { s.mult[Effect::UnmodelledMode] = mode_response(l, c); });
+    Trial par = fit_pole(a, Effect::UnmodelledMode, Xp, Rp, true, starts, true, true, in_parallel);
+    Trial ser = fit_pole(a, Effect::UnmodelledMode, Xs, Rs, true, starts, true, true, in_series);
     std::get<UnmodelledMode>(par.fit.parameters).series = false;
     std::get<UnmodelledMode>(ser.fit.parameters).series = true;
     return ser.V < par.V ? ser : par;

@@ -182,10 +182,6 @@ GapValidation validate_gap(const GapValidationOptions& o) {
 }
 
 namespace {
-double rate(const GapValidation& v, const std::string& cat) {
-  const auto it = v.by_category.find(cat);
-  return it == v.by_category.end() || it->second[1] == 0 ? NAN : static_cast<double>(it->second[0]) / it->second[1];
-}
 // up_to_alternatives: count GapValidationCase::correct_up_to_alternatives.
 double rate(const GapValidation& v, std::initializer_list<const char*> cats, bool up_to_alternatives) {
   int c = 0, n = 0;
@@ -210,7 +206,7 @@ double share_at_most_2(const GapValidation& v) {
 
 bool gap_validation_targets_met(const GapValidation& v) {
   auto ok = [](double r, double target, bool above) { return std::isnan(r) || (above ? r >= target : r <= target); };
-  return ok(rate(v, "clear"), kTargetClear, true) && ok(subtle_or_pair_rate(v), kTargetSubtleOrPair, true) &&
+  return ok(rate(v, {"clear"}, false), kTargetClear, true) && ok(subtle_or_pair_rate(v), kTargetSubtleOrPair, true) &&
          ok(v.false_alarm_rate, kTargetFalseAlarms, false) && ok(share_at_most_2(v), 1.0, true);
 }
 
@@ -231,7 +227,7 @@ nlohmann::json gap_validation_to_json(const GapValidation& v) {
   for (const auto& t : v.confusion)
     for (const auto& p : t.second) j["confusion"][t.first][p.first] = p.second;
   for (const auto& c : v.by_category) j["by_category"][c.first] = {{"correct", c.second[0]}, {"cases", c.second[1]}};
-  j["clear_single_rate"] = rate(v, "clear");
+  j["clear_single_rate"] = rate(v, {"clear"}, false);
   j["subtle_or_pair_rate"] = subtle_or_pair_rate(v);
   j["clear_single_rate_up_to_alternatives"] = rate(v, {"clear"}, true);
   j["subtle_or_pair_rate_up_to_alternatives"] = rate(v, {"subtle", "pair"}, true);
