@@ -24,7 +24,57 @@ struct GapCommand {
 struct GapValidateCommand {
   std::string json_path;
   GapValidationOptions options;
+  // Measured noise (gap_cases.hpp): records whose period-pair differences are
+  // the noise; one meta for all; the columns by header name.
+  std::vector<std::string> noise_paths;
+  std::string noise_meta_path;
+  RecordSelection noise_selection;
+  bool period_given = false, periods_given = false;
 };
+
+// The measured-noise pool of --noise-from, read and checked before any case
+// is made; P is the noise records' period and M, unless given, the smaller of
+// 8 and the pool's size. Fails (exit 2) naming the option: --noise-from
+// without --noise-meta, --noise-input or --noise-output (or those without
+// --noise-from), a --period other than the records', more --periods than
+// the pool holds.
+void read_noise_pool(GapValidateCommand& c) {
+  GapValidationOptions& o = c.options;
+  const bool any = !c.noise_meta_path.empty() || !c.noise_selection.inputs.empty() ||
+                   !c.noise_selection.outputs.empty() || c.noise_selection.skip_periods > 0;
+  if (c.noise_paths.empty()) {
+    if (any)
+      throw Error(ErrorKind::Input, "--noise-meta/--noise-input/--noise-output/--noise-skip-periods",
+                  "apply to measured noise: add --noise-from DATA.csv");
+    return;
+  }
+  if (c.noise_meta_path.empty() || c.noise_selection.inputs.size() != 1 || c.noise_selection.outputs.size() != 1)
+    throw Error(ErrorKind::Input, "--noise-from",
+                "needs --noise-meta META.json and one --noise-input and one --noise-output column name (e.g. "
+                "--noise-input Force --noise-output Acceleration1)");
+  auto pool = std::make_shared<MeasuredNoise>();
+  for (const std::string& path : c.noise_paths) {
+    const Records r = read_records(path, c.noise_meta_path, c.noise_selection);
+    pool->period = r.meta.period;
+    add_measured_noise(*pool, r.samples.col(1), path);
+  }
+  if (c.period_given && o.period != pool->period)
+    throw Error(ErrorKind::Input, "--period",
+                "the noise records have period " + std::to_string(pool->period) + ": leave --period out or give that");
+  o.period = pool->period;
+  const int held = static_cast<int>(pool->periods.size());
+  if (!c.periods_given) o.periods = std::min(8, held);
+  if (o.periods > held)
+    throw Error(ErrorKind::Input, "--periods",
+                "the noise records hold " + std::to_string(held) +
+                    " noise periods (one per two measured periods): give --periods <= " + std::to_string(held) +
+                    " or more --noise-from records");
+  if (o.periods < 4)
+    throw Error(ErrorKind::Input, "--noise-from",
+                "the noise records hold " + std::to_string(held) + " noise period(s); a case needs at least 4 (8 "
+                "measured periods after --noise-skip-periods, in one record or several)");
+  o.measured_noise = pool;
+}
 
 std::string band_text(const std::array<double, 2>& b) { return "[" + sci(b[0], 4) + ", " + sci(b[1], 4) + "]"; }
 
@@ -213,6 +263,7 @@ int run_gap(const GapCommand& c) {
 
 int run_gap_validate(GapValidateCommand c) {
   GapValidationOptions& o = c.options;
+  read_noise_pool(c);
   if (static_cast<long long>(o.period) * o.periods > 10000000LL)
     throw Error(ErrorKind::Input, "--period", "period x periods above 1e7 samples");
   Out out{c.json_path == "-"};
@@ -220,7 +271,11 @@ int run_gap_validate(GapValidateCommand c) {
   const GapValidation v = validate_gap(o);
   const nlohmann::json j = to_json(v);
   out << "gap-validate: " << v.cases << " blind cases (" << fdsid::to_string(o.family) << " family, P = " << o.period
-      << ", M = " << o.periods << ", seed " << o.seed << "), exact verdicts " << sci(v.accuracy, 3) << "\n";
+      << ", M = " << o.periods << ", seed " << o.seed
+      << (o.measured_noise ? ", measured noise: " + std::to_string(o.measured_noise->periods.size()) + " noise periods from " +
+                                 std::to_string(o.measured_noise->sources.size()) + " record(s)"
+                           : std::string())
+      << "), exact verdicts " << sci(v.accuracy, 3) << "\n";
   for (const auto& cat : v.by_category)
     out << "  " << cat.first << ": " << cat.second[0] << "/" << cat.second[1] << " correct\n";
   // Rates of a category with no case are NaN: "n/a", not "nan"; numbers in 4
@@ -288,8 +343,23 @@ void register_gap_validate(CLI::App& app, Action& chosen) {
   auto* gval = app.add_subcommand("gap-validate", "blind validation of gap on generated cases (effects withheld)");
   gval->add_option("--cases", o.cases, "number of cases (default 100)")->check(CLI::Range(1, 100000));
   gval->add_option("--seed", o.seed, "random seed")->capture_default_str();
-  gval->add_option("--period", o.period, "samples per period P (default 1024)")->check(CLI::Range(32, 1 << 20));
-  gval->add_option("--periods", o.periods, "periods M (default 8)")->check(CLI::Range(4, 1000));
+  gval->add_option("--period", o.period, "samples per period P (default 1024; with --noise-from the records' period)")
+      ->check(CLI::Range(32, 1 << 20))
+      ->each([c](const std::string&) { c->period_given = true; });
+  gval->add_option("--periods", o.periods, "periods M (default 8; with --noise-from at most the noise periods held)")
+      ->check(CLI::Range(4, 1000))
+      ->each([c](const std::string&) { c->periods_given = true; });
+  gval->add_option("--noise-from", c->noise_paths,
+                   "measured noise instead of the synthetic: periodic records CSV (repeatable; one --noise-meta for "
+                   "all); each pair of consecutive periods gives one noise period, their difference / sqrt(2)")
+      ->check(CLI::ExistingFile);
+  gval->add_option("--noise-meta", c->noise_meta_path, "meta JSON of the --noise-from records")->check(CLI::ExistingFile);
+  gval->add_option("--noise-input", c->noise_selection.inputs, "the --noise-from records' input column (header name)");
+  gval->add_option("--noise-output", c->noise_selection.outputs,
+                   "the --noise-from records' output column (header name): its noise is used");
+  gval->add_option("--noise-skip-periods", c->noise_selection.skip_periods,
+                   "drop this many leading periods of each --noise-from record (a transient)")
+      ->check(CLI::NonNegativeNumber);
   gval->add_option("--family", o.family,
                    "case family: classic (default), structure (lightly damped many-mode structures, noise rising with "
                    "frequency, a spring nonlinearity in the loop) or mixed (alternating cycles of 20)")

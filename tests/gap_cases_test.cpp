@@ -9,6 +9,8 @@
 
 #include <cmath>
 #include <complex>
+#include <memory>
+#include <random>
 #include <set>
 
 #include "linalg.hpp"
@@ -372,6 +374,90 @@ TEST(GapCases, NamesAndErrors) {
   expect_input(o);
   o.periods = 0;
   expect_input(o);
+}
+
+// Measured noise (gap_cases.hpp, "Measured noise"; issue 17 item 5). A
+// "measured" column of 12 periods: a periodic response plus an AR(1) noise
+// whose power steps by period (as the F-16's varies 30-50 %). The pool holds
+// its 6 period-pair differences / √2 — the periodic part cancels, so each
+// equals the noise alone to rounding (1e-12 of the noise's scale: one
+// subtraction of values ~10× the noise). A case with that pool injects M of
+// them, distinct, times the truth's factor, onto the same noise-free record
+// the case without measured noise has (the same draws; an effect-free case's
+// ν does not depend on the noise shape); the input column is unchanged but
+// for its own noise. The errors come before any work.
+TEST(GapCases, MeasuredNoiseIsThePoolsPeriodsScaled) {
+  const int P = 256, periods = 12;
+  std::mt19937_64 g(7);
+  std::normal_distribution<double> normal;
+  Eigen::VectorXd periodic(P), noise(P * periods);
+  for (int t = 0; t < P; ++t) periodic(t) = 10 * std::sin(2 * M_PI * 3 * t / P) + 5 * normal(g);
+  double state = 0;
+  for (int t = 0; t < P * periods; ++t) {
+    state = 0.8 * state + normal(g);
+    noise(t) = (1 + 0.25 * (t / P % 3)) * state;
+  }
+  Eigen::VectorXd column(P * periods);
+  for (int t = 0; t < P * periods; ++t) column(t) = periodic(t % P) + noise(t);
+  auto pool = std::make_shared<MeasuredNoise>();
+  pool->period = P;
+  add_measured_noise(*pool, column, "synthetic column");
+  ASSERT_EQ(pool->periods.size(), 6u);
+  const double scale = noise.cwiseAbs().maxCoeff();
+  for (int i = 0; i < 6; ++i)
+    for (int t = 0; t < P; ++t)
+      ASSERT_NEAR(pool->periods[static_cast<std::size_t>(i)][static_cast<std::size_t>(t)],
+                  (noise(2 * i * P + t) - noise((2 * i + 1) * P + t)) / std::sqrt(2.0), 1e-12 * 10 * scale);
+
+  for (const auto& effects : {std::vector<Effect>{}, std::vector<Effect>{Effect::Delay}}) {
+    GapCaseOptions o;
+    o.effects = effects;
+    o.strength = effects.empty() ? Strength::None : Strength::Clear;
+    o.seed = 11;
+    o.period = P;
+    o.periods = 4;
+    GapCaseOptions plain = o;
+    o.measured_noise = pool;
+    const GapCase with = make_gap_case(o);
+    GapCaseOptions quiet = o;
+    quiet.noise = false;
+    const GapCase noiseless = make_gap_case(quiet);
+    EXPECT_EQ(with.truth["system"], make_gap_case(plain).truth["system"]);
+    EXPECT_EQ(with.meta.excited_lines, make_gap_case(plain).meta.excited_lines);
+    const auto& m = with.truth["noise"]["measured"];
+    const std::vector<int> chosen = m["chosen"].get<std::vector<int>>();
+    ASSERT_EQ(chosen.size(), 4u);
+    EXPECT_EQ(std::set<int>(chosen.begin(), chosen.end()).size(), 4u);
+    const double factor = m["factor"].get<double>();
+    const double peak = noiseless.record.col(1).cwiseAbs().maxCoeff() + factor * 10 * scale;
+    for (int k = 0; k < 4; ++k)
+      for (int t = 0; t < P; ++t)
+        ASSERT_NEAR(with.record(k * P + t, 1) - noiseless.record(k * P + t, 1),
+                    factor * pool->periods[static_cast<std::size_t>(chosen[static_cast<std::size_t>(k)])]
+                                          [static_cast<std::size_t>(t)],
+                    1e-12 * peak);
+    if (effects.empty()) {
+      const GapCase plain_quiet = [&] {
+        GapCaseOptions q = plain;
+        q.noise = false;
+        return make_gap_case(q);
+      }();
+      EXPECT_EQ(plain_quiet.record.col(1), noiseless.record.col(1));
+    }
+  }
+
+  GapCaseOptions bad;
+  bad.period = 512;  // not the pool's period
+  bad.periods = 4;
+  bad.measured_noise = pool;
+  EXPECT_THROW(make_gap_case(bad), Error);
+  bad.period = P;
+  bad.periods = 7;  // the pool holds 6
+  EXPECT_THROW(make_gap_case(bad), Error);
+  MeasuredNoise odd;
+  odd.period = P;
+  EXPECT_THROW(add_measured_noise(odd, column.head(P * 3 + 1), "ragged"), Error);
+  EXPECT_THROW(add_measured_noise(odd, column.head(P), "one period"), Error);
 }
 
 // Speed lives in bench/bench_gap.cpp (the brief: no timed unit tests).

@@ -789,6 +789,15 @@ void validate_options(const GapCaseOptions& o) {
   for (Effect e : o.effects)
     if (!seen.insert(e).second) fail("effect '" + std::string(to_string(e)) + "' given twice");
   if (!o.effects.empty() && o.strength == Strength::None) fail("effects need strength subtle or clear, not none");
+  if (o.measured_noise) {
+    const MeasuredNoise& mn = *o.measured_noise;
+    if (mn.period != o.period)
+      fail("the measured noise has period " + std::to_string(mn.period) + ", the case " + std::to_string(o.period) +
+           ": use the noise record's period");
+    if (static_cast<std::size_t>(o.periods) > mn.periods.size())
+      fail("the measured noise holds " + std::to_string(mn.periods.size()) + " noise periods (two measured periods each), the case needs " +
+           std::to_string(o.periods) + ": use fewer periods or add noise records");
+  }
 }
 
 // Step 2 of gap_cases.hpp: the random-odd multisine (Schoukens) over the odd
@@ -867,6 +876,37 @@ Section draw_noise_filter(Draw& d, Setting& st, bool rising) {
   st.w.resize(st.q.size());
   for (std::size_t k = 0; k < st.q.size(); ++k) st.w[k] = std::norm(hv.at(st.q[k]));
   return hv;
+}
+
+// The measured noise's shape (gap_cases.hpp, "Measured noise"): st.w = the
+// pool's per-line variance averaged over lines k−4 … k+4 (fewer at the ends),
+// normalised to mean 1 over the excited lines. Returns that normalisation, s0:
+// the pool's samples have per-line variance s0 · st.w(k), so the factor
+// √(ν / s0) gives them ν · st.w(k). A line where the pool has no power at all
+// (a zero band of a filtered measurement) is floored at 1e-12 of the mean, so
+// the calibration's divisions stay finite; the effects there are then huge
+// against the noise, as they would be in that measurement.
+double measured_shape(const MeasuredNoise& mn, Fft& fft, Setting& st) {
+  const std::size_t bins = st.q.size();
+  std::vector<double> raw(bins, 0.0);
+  for (const std::vector<double>& n : mn.periods) {
+    const std::vector<cplx> N = fft.forward(n.data());
+    for (std::size_t k = 0; k < bins; ++k) raw[k] += std::norm(N[k]);
+  }
+  const int half = 4;
+  st.w.assign(bins, 0.0);
+  for (std::size_t k = 0; k < bins; ++k) {
+    const std::size_t lo = k >= static_cast<std::size_t>(half) ? k - half : 0, hi = std::min(bins - 1, k + half);
+    double sum = 0;
+    for (std::size_t i = lo; i <= hi; ++i) sum += raw[i];
+    st.w[k] = sum / static_cast<double>((hi - lo + 1) * mn.periods.size());
+  }
+  double mean = 0;
+  for (int k : st.excited) mean += st.w[static_cast<std::size_t>(k)];
+  mean /= static_cast<double>(st.excited.size());
+  if (!(mean > 0)) throw Error(ErrorKind::Input, kWhere, "the measured noise has no power on the excited lines");
+  for (double& w : st.w) w = std::max(w / mean, 1e-12);
+  return mean;
 }
 
 // Output signal power per excited line of one period's DFT (the SNR's numerator).
@@ -1025,19 +1065,38 @@ double draw_input_noise(Draw& d, const Setting& st, double nu) {
 // the record after a burn-in of 400 samples (noise-filter poles have modulus
 // ≤ 0.9), and the white input noise. All from the noise stream `dn`: first
 // the N + 400 output-noise normals, then one input-noise normal per sample.
+// With measured noise (`chosen` not null) the output noise is instead the
+// pool's periods, M of them drawn without replacement (a partial
+// Fisher–Yates shuffle by the noise stream, one draw per period; their pool
+// indices into *chosen), times `factor`; then the input noise as above.
 Eigen::MatrixXd noisy_record(Draw& dn, const Section& hv, double nu, double input_var, const Setting& st,
-                             const std::vector<double>& y, bool noise) {
+                             const std::vector<double>& y, bool noise, const MeasuredNoise* measured = nullptr,
+                             double factor = 0, std::vector<int>* chosen = nullptr) {
   const std::size_t P = static_cast<std::size_t>(st.P), N = y.size(), burn = 400;
   Eigen::MatrixXd record(static_cast<Eigen::Index>(N), 2);
-  std::vector<double> e(N + burn), v;
-  for (double& x : e) x = std::sqrt(nu) * dn.normal();
-  hv.filter(e, v);
+  std::vector<double> v;
+  if (measured) {
+    std::vector<int> pool(measured->periods.size());
+    for (std::size_t i = 0; i < pool.size(); ++i) pool[i] = static_cast<int>(i);
+    for (int m = 0; m < st.M; ++m) {
+      const int j = dn.integer(m, static_cast<int>(pool.size()) - 1);
+      std::swap(pool[static_cast<std::size_t>(m)], pool[static_cast<std::size_t>(j)]);
+      chosen->push_back(pool[static_cast<std::size_t>(m)]);
+      for (double x : measured->periods[static_cast<std::size_t>(pool[static_cast<std::size_t>(m)])])
+        v.push_back(factor * x);
+    }
+  } else {
+    std::vector<double> e(N + burn);
+    for (double& x : e) x = std::sqrt(nu) * dn.normal();
+    hv.filter(e, v);
+    v.erase(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(burn));
+  }
   const double su = std::sqrt(input_var);
   for (std::size_t t = 0; t < N; ++t) {
     const Eigen::Index i = static_cast<Eigen::Index>(t);
     const double nu_t = su * dn.normal();
     record(i, 0) = st.u[t % P] + (noise ? nu_t : 0.0);
-    record(i, 1) = y[t] + (noise ? v[t + burn] : 0.0);
+    record(i, 1) = y[t] + (noise ? v[t] : 0.0);
   }
   return record;
 }
@@ -1046,6 +1105,8 @@ Eigen::MatrixXd noisy_record(Draw& dn, const Section& hv, double nu, double inpu
 struct CaseNumbers {
   double signal = 0, nu = 0, input_var = 0, ratio_combined = 0, transient_energy = 0;
   bool clamped = false;
+  double measured_scale = 0;       // s0 of measured_shape (measured noise only)
+  std::vector<int> measured_chosen;  // the pool periods used, in record order
 };
 
 // The truth JSON of gap_cases.hpp, and the truth bands (each effect's
@@ -1085,6 +1146,16 @@ void write_truth(const GapCaseOptions& o, const Base& base, const Setting& st, c
                 {"input_std", std::sqrt(n.input_var)},
                 {"enabled", o.noise},
                 {"definition", "per-line variance of one period's unitary DFT = scale |H_v|^2; of the M-period mean: /M"}};
+  if (o.measured_noise) {
+    t["noise"]["filter"] = nullptr;
+    t["noise"]["definition"] =
+        "per-line variance of one period's unitary DFT = scale w(k), w the measured pool's own shape (gap_cases.hpp); "
+        "of the M-period mean: /M";
+    t["noise"]["measured"] = {{"sources", o.measured_noise->sources},
+                              {"pool", o.measured_noise->periods.size()},
+                              {"chosen", n.measured_chosen},
+                              {"factor", std::sqrt(n.nu / n.measured_scale)}};
+  }
   t["system"] = {{"modes", modes},
                  {"real_pole", base.has_real ? json(base.real_pole) : json(nullptr)},
                  {"real_residue", base.has_real ? json(base.real_residue) : json(nullptr)},
@@ -1096,6 +1167,22 @@ void write_truth(const GapCaseOptions& o, const Base& base, const Setting& st, c
 }
 
 }  // namespace
+
+void add_measured_noise(MeasuredNoise& pool, const Eigen::VectorXd& column, const std::string& source) {
+  const Eigen::Index P = pool.period;
+  if (P < 2 || column.size() % P != 0 || column.size() / P < 2)
+    throw Error(ErrorKind::Input, source,
+                "a measured noise record needs at least 2 whole periods of " + std::to_string(P) + " samples, got " +
+                    std::to_string(column.size()) + " samples");
+  if (!column.allFinite()) throw Error(ErrorKind::Input, source, "the noise column holds a value that is not finite");
+  const double r = std::sqrt(0.5);
+  for (Eigen::Index m = 0; m + 1 < column.size() / P; m += 2) {
+    std::vector<double> n(static_cast<std::size_t>(P));
+    for (Eigen::Index t = 0; t < P; ++t) n[static_cast<std::size_t>(t)] = r * (column(m * P + t) - column((m + 1) * P + t));
+    pool.periods.push_back(std::move(n));
+  }
+  pool.sources.push_back(source);
+}
 
 /// One blind case of the gap validation (gap_cases.hpp, steps 1-4 and the
 /// strength calibration).
@@ -1121,9 +1208,10 @@ GapCase make_gap_case(const GapCaseOptions& o) {
   const double w_lo = std::max(0.08 * w_band, kTwoPi * 2 / st.P), w_hi = 0.9 * w_band;
   const Base base = o.structure ? draw_structure(d, w_lo, w_hi) : draw_system(d, w_lo, w_hi);
   simulate_model(base, fft, st);
-  const Section hv = draw_noise_filter(d, st, o.structure);
-
+  const Section hv = draw_noise_filter(d, st, o.structure);  // drawn either way: the same draws follow
   CaseNumbers n;
+  if (o.measured_noise) n.measured_scale = measured_shape(*o.measured_noise, fft, st);
+
   n.signal = signal_power(st);
   std::vector<Injected> effects = draw_effects(d, o, base, st, w_lo, w_band);
   Calibrator cal(base, st, fft);
@@ -1136,7 +1224,9 @@ GapCase make_gap_case(const GapCaseOptions& o) {
   n.input_var = draw_input_noise(d, st, n.nu);
 
   GapCase out;
-  out.record = noisy_record(dn, hv, n.nu, n.input_var, st, y.y, o.noise);
+  out.record = o.measured_noise ? noisy_record(dn, hv, n.nu, n.input_var, st, y.y, o.noise, o.measured_noise.get(),
+                                               std::sqrt(n.nu / n.measured_scale), &n.measured_chosen)
+                                : noisy_record(dn, hv, n.nu, n.input_var, st, y.y, o.noise);
   out.sim_model = realise(base);
   out.meta.period = st.P;
   out.meta.periods = st.M;

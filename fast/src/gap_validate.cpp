@@ -37,6 +37,7 @@ GapCaseOptions schedule(const GapValidationOptions& o, int i, std::string& categ
   c.periods = o.periods;
   c.seed = o.seed * 1000003ULL + static_cast<std::uint64_t>(i);
   c.structure = o.family == GapFamily::Structure || (o.family == GapFamily::Mixed && (i / 20) % 2 == 1);
+  c.measured_noise = o.measured_noise;
   const auto& names = kAllEffects;
   const int slot = i % 20;
   if (slot < 2) {
@@ -134,6 +135,10 @@ GapValidation validate_gap(const GapValidationOptions& o) {
   GapValidation v;
   v.cases = o.cases;
   v.rows.resize(o.cases);
+  if (o.measured_noise) {
+    v.noise_sources = o.measured_noise->sources;
+    v.noise_pool = static_cast<int>(o.measured_noise->periods.size());
+  }
   std::atomic<int> next{0};
   std::mutex mu;
   ProgressCounter progress(o.progress, o.cases);
@@ -233,6 +238,9 @@ nlohmann::json gap_validation_to_json(const GapValidation& v) {
   j["subtle_or_pair_rate_up_to_alternatives"] = rate(v, {"subtle", "pair"}, true);
   j["false_alarm_rate"] = v.false_alarm_rate;
   j["band_hit_rate"] = v.band_hit_rate;
+  j["noise"] = v.noise_sources.empty()
+                   ? nlohmann::json{{"measured", false}}
+                   : nlohmann::json{{"measured", true}, {"sources", v.noise_sources}, {"pool", v.noise_pool}};
   const auto& g = v.gap_after_correct;
   auto q = [&](double p) { return g.empty() ? NAN : g[static_cast<size_t>(p * (g.size() - 1))]; };
   j["gap_after_correct"] = {{"n", g.size()},     {"median", q(0.5)}, {"p90", q(0.9)},

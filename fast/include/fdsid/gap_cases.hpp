@@ -50,6 +50,19 @@
 /// settle counts as no deviation and its magnitude is not used). Its strength
 /// is the distortion on the unexcited lines, as for the static polynomial.
 ///
+/// Measured noise (`measured_noise`, issue 17 item 5: effects injected into
+/// real measured noise; the model, excitation and effects are drawn exactly as
+/// without it): the output noise is not H_v e but measured noise periods
+/// (MeasuredNoise below), M of them drawn without replacement from the pool
+/// by the noise stream, scaled by one factor. Its shape σ²(k)/ν = w(k) is the
+/// pool's own per-line variance (mean of |N(k)|² over the pool's periods,
+/// averaged over the 9 lines k−4 … k+4 — a 2·9·Q degree-of-freedom estimate for
+/// Q pool periods; the measured spectrum's shape varies little over 9 lines of
+/// a period-long DFT — and normalised to mean 1 over the excited lines), so the
+/// calibration below holds in the mean over periods; what the measured noise
+/// adds is what a Gaussian stationary model leaves out: power that varies from
+/// period to period, drift, non-Gaussian bursts. The period P is the noise's.
+///
 /// Strength calibration. For each withheld effect alone (applied to the
 /// simulation model), ratio = mean over its lines of |ΔY(k)|² / (σ²(k)/M),
 /// ΔY the noise-free deviation of the output spectrum (per-period DFT as above):
@@ -68,6 +81,7 @@
 /// (then truth["snr_clamped"] is true). Achieved ratios are in the truth.
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -81,6 +95,24 @@
 namespace fdsid {
 
 enum class Strength { None, Subtle, Clear };
+
+/// Noise periods cut from a measured periodic record (see above): period i is
+/// (y_{2i} − y_{2i+1}) / √2, y_m the record's m-th period of one column. The
+/// periodic response (linear and nonlinear alike) cancels exactly; for noise
+/// that is stationary over two periods the difference has the noise's own
+/// spectrum, and periods from disjoint pairs are independent — which the
+/// deviations from the mean of the periods are not (they sum to zero).
+struct MeasuredNoise {
+  int period = 0;                             ///< P
+  std::vector<std::vector<double>> periods;  ///< the pool, each P samples
+  std::vector<std::string> sources;          ///< where they came from (reported in the truth)
+};
+
+/// Appends the ⌊M/2⌋ noise periods of one measured column (P·M samples, whole
+/// periods) to `pool`. Fails: Error(Input) when the length is not a whole
+/// number of periods of pool.period, fewer than 2 periods, or the column is
+/// not finite.
+void add_measured_noise(MeasuredNoise& pool, const Eigen::VectorXd& column, const std::string& source);
 
 /// "none", "subtle", "clear".
 const char* to_string(Strength strength);
@@ -97,6 +129,9 @@ struct GapCaseOptions {
   std::uint64_t seed = 1;
   bool noise = true;                 ///< testing hook: false leaves out the input and output noise (nothing else changes)
   bool structure = false;            ///< the structure family (above)
+  /// Measured noise (above); null: the synthetic noise of step 4. Needs
+  /// period == measured_noise->period and periods ≤ its pool size.
+  std::shared_ptr<const MeasuredNoise> measured_noise;
 };
 
 struct GapCase {
@@ -110,7 +145,9 @@ struct GapCase {
   std::vector<std::array<double, 2>> bands;
   /// Effect parameters, achieved ratios, noise level and filter, system, excitation.
   /// Fields: "strength", "seed", "period", "periods", "snr_db", "snr_clamped",
-  /// "noise" {"scale" (ν), "filter" {"b", "a"} (H_v in z^-1), "input_std"},
+  /// "noise" {"scale" (ν), "filter" {"b", "a"} (H_v in z^-1), "input_std";
+  /// with measured noise also "measured" {"sources", "pool", "chosen" (pool
+  /// indices, in record order), "factor" (the samples' scale)}},
   /// "system" {"modes" [{"frequency", "damping", "residue" [re, im]}], "real_pole", "D"},
   /// "excitation" {"band_line" (K), "lines", "rms"}, "ratio_combined" (all
   /// effects together, on the excited lines), and "details" {name: {"ratio",

@@ -12,8 +12,11 @@
 /// Families (gap_cases.hpp): classic (the default), structure (every case
 /// from the structure family: lightly damped many-mode structures, noise
 /// rising with frequency, the nonlinearity a spring in the loop), or mixed
-/// (cycles of 20 alternate: classic, structure, classic, …).
+/// (cycles of 20 alternate: classic, structure, classic, …). Either family
+/// can take measured noise instead of its synthetic noise (`measured_noise`;
+/// gap_cases.hpp): the same draws otherwise, P the noise record's.
 #include <cstdint>
+#include <memory>
 #include <functional>
 #include <map>
 #include <string>
@@ -22,6 +25,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fdsid/gap.hpp"
+#include "fdsid/gap_cases.hpp"
 
 namespace fdsid {
 
@@ -38,6 +42,7 @@ struct GapValidationOptions {
   std::string workdir;  ///< where the case files go (created; removed afterwards unless keep_files)
   bool keep_files = false;  ///< keep the case files, and each case's truth.json (the withheld truth)
   int threads = 0;      ///< 0: hardware concurrency
+  std::shared_ptr<const MeasuredNoise> measured_noise;  ///< null: each family's synthetic noise
   GapOptions gap;
   std::function<void(int done, int total)> progress;  ///< called from the worker threads, serialised
 };
@@ -67,6 +72,8 @@ struct GapValidation {
   double band_hit_rate = 0;     ///< truth bands hit / truth bands, over cases with effects
   std::vector<double> gap_after_correct;  ///< sorted, correct verdicts with effects
   std::vector<GapValidationCase> rows;
+  std::vector<std::string> noise_sources;  ///< measured noise's records (empty: synthetic noise)
+  int noise_pool = 0;                      ///< noise periods they held
 };
 
 /// Issue 17's targets: clear single effects ≥ 0.99, subtle singles and pairs
