@@ -157,7 +157,9 @@ void print_report(Out& out, const GapReport& r, int periods) {
       << " excited lines, M = " << periods << "), after " << sci(r.gap_after) << "\n";
   out << verdict_line(r) << "\n";
   out << "tests: p(gap) " << p_text(r.p_gap) << ", p(nonlinearity, " << r.unexcited << " unexcited lines) "
-      << p_text(r.p_nonlinearity) << ", p(leakage) " << p_text(r.p_leakage) << "\n";
+      << p_text(r.p_nonlinearity) << ", p(leakage) " << p_text(r.p_leakage)
+      << (r.period_power.empty() ? std::string() : ", p(equal noise power per period) " + p_text(r.p_period_power))
+      << "\n";
   out << distortion_line(r) << "\n";
   if (!r.alternatives.empty()) {
     const std::string e = fdsid::to_string(r.path.front().added);

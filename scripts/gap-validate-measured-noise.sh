@@ -26,11 +26,12 @@ SB=$D/silverbox
 
 echo "== F-16 GVT, full multisine Level 1 (Acceleration1; period 1 dropped): 4 noise periods, P 8192, M 4"
 F=$D/f16-gvt
-# Level 1 only: at Level 7 the period-to-period differences are 20-50x Level
-# 1's in 2-200 Hz and, by the data set's README, non-periodic nonlinear
-# contributions (friction, clearance), not measurement noise; with them the
-# effect-free cases' gap is 0.69-0.99, not about 1 (the mean over periods varies
-# less than the periods' scatter says: they are not independent).
+# Level 1 only (its own findings: README, "Measured noise"). At Level 7 the
+# period-to-period differences are 20-50x Level 1's in 2-200 Hz and, by the
+# data set's README, non-periodic nonlinear contributions (friction,
+# clearance), not measurement noise; with them the effect-free cases' gap is
+# 0.69-0.99, not about 1 (the mean over periods varies less than the periods'
+# scatter says: they are not independent).
 "$B/fdsid" gap-validate --cases "$N" --seed "$S" --noise-meta "$F/F16Data_FullMSine.meta.json" \
   --noise-input Voltage --noise-output Acceleration1 --noise-skip-periods 1 \
   --noise-from "$F/F16Data_FullMSine_Level1.csv" || true

@@ -669,5 +669,96 @@ TEST(GapDiagnosis, RefusesWhatItCannotUse) {
   EXPECT_THROW(diagnose_gap(g, rec, 1, meta, o), Error);
 }
 
+// Equal noise power per period (period_power_test, gap.hpp; issue 17: real
+// noise is not stationary). Level: 2000 null draws (R = 3 … 7 periods, K =
+// 400 consecutive lines; a fixed model error per line, which the test must
+// ignore; a noise level smooth in k, exp(1.5 sin(2πk/K + φ)), 26 dB from
+// lowest to highest power; and per period a leakage term c_m T(k), T(k) =
+// 1 / (1 − 0.68 e^{−iπk/K}) — the DFT of a period of noise through a
+// first-order filter with pole 0.68 — c_m ~ 3 × complex normal: power 18 ×
+// 9.8 = 176 at the lowest lines against a line noise power of 0.05 … 20,
+// which the pairwise differencing must cancel). The count of p < 0.01 is
+// Bin(2000, 0.01) if the test holds its level — mean 20, sd 4.4 — and
+// [5, 38] is ± 3.4 sd (the normal limit over 200 pairs adds little); p < 0.1:
+// mean 200, sd 13.4, [150, 250]. The same statistic on the lines one by one
+// (each line paired with a zero column: no differencing) must reject nearly
+// always on these draws — else they would not test the cancellation; more
+// than half is asked.
+// Power: one period at 1.5 × and one at 0.7 × the noise power of the rest,
+// 200 pairs, R = 5: the shares move by ~0.05 against a standard error of
+// ~0.012, so S is near 70 (p ≪ 1e-6); its relative powers order so.
+TEST(GapDiagnosis, EqualNoisePowerPerPeriodTestHoldsItsLevel) {
+  std::mt19937_64 g(2024);
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> phase(0, 2 * M_PI);
+  auto draw = [&](int R, int K, const std::vector<double>& power) {
+    Eigen::MatrixXcd res(R, K);
+    std::vector<cplx> leak;
+    for (int m = 0; m < R; ++m) leak.push_back(3.0 * cplx(normal(g), normal(g)));
+    const double phi = phase(g);
+    for (int k = 0; k < K; ++k) {
+      const double level = std::exp(1.5 * std::sin(2 * M_PI * k / K + phi));
+      const cplx error(3 * normal(g), 3 * normal(g));
+      const cplx T = 1.0 / (1.0 - 0.68 * std::polar(1.0, -M_PI * k / K));
+      for (int m = 0; m < R; ++m)
+        res(m, k) = error + leak[static_cast<size_t>(m)] * T +
+                    level * std::sqrt(power[static_cast<size_t>(m)] / 2) * cplx(normal(g), normal(g));
+    }
+    return res;
+  };
+  int below_001 = 0, below_01 = 0, undifferenced_below_001 = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const int R = 3 + i % 5;
+    const Eigen::MatrixXcd res = draw(R, 400, std::vector<double>(static_cast<size_t>(R), 1.0));
+    const PeriodPowerTest t = period_power_test(res);
+    ASSERT_EQ(t.relative.size(), static_cast<size_t>(R));
+    below_001 += t.p < 0.01;
+    below_01 += t.p < 0.1;
+    Eigen::MatrixXcd single = Eigen::MatrixXcd::Zero(R, 2 * res.cols());
+    for (Eigen::Index k = 0; k < res.cols(); ++k) single.col(2 * k) = res.col(k);
+    undifferenced_below_001 += period_power_test(single).p < 0.01;
+  }
+  EXPECT_GE(below_001, 5);
+  EXPECT_LE(below_001, 38);
+  EXPECT_GE(below_01, 150);
+  EXPECT_LE(below_01, 250);
+  EXPECT_GT(undifferenced_below_001, 1000);
+  const PeriodPowerTest unequal = period_power_test(draw(5, 400, {1, 1.5, 0.7, 1, 1}));
+  EXPECT_LT(unequal.p, 1e-6);
+  EXPECT_GT(unequal.relative[1], 1.1);
+  EXPECT_LT(unequal.relative[2], 0.9);
+  EXPECT_EQ(period_power_test(draw(2, 400, {1, 1})).p, 1.0);   // two periods: q ≡ 1/2
+  EXPECT_EQ(period_power_test(draw(5, 20, {1, 1, 1, 1, 1})).p, 1.0);  // too few lines
+}
+
+// The diagnosis says so: an effect-free generated case (stationary noise) has
+// no such note; the same case with periods 4 and 5's noise scaled by √2 and
+// 1/√2 (power 2 and 1/2; its noise-free record is the case made without
+// noise) gets it, with p(equal power) < effect_alpha.
+TEST(GapDiagnosis, UnequalNoisePowerPerPeriodIsNoted) {
+  GapCaseOptions o;
+  o.strength = Strength::None;
+  o.seed = 5;
+  const GapCase c = make_gap_case(o);
+  o.noise = false;
+  const GapCase quiet = make_gap_case(o);
+  const auto noted = [](const GapReport& r) {
+    return std::any_of(r.notes.begin(), r.notes.end(),
+                       [](const std::string& n) { return n.find("noise power differs between periods") != std::string::npos; });
+  };
+  const GapReport plain = diagnose_gap(c.sim_model, c.record, 1, c.meta);
+  EXPECT_FALSE(noted(plain)) << plain.p_period_power;
+  EXPECT_EQ(plain.period_power.size(), static_cast<size_t>(c.meta.periods - 1));
+  Eigen::MatrixXd rec = c.record;
+  const Eigen::Index P = c.meta.period;
+  for (int m : {4, 5})
+    rec.col(1).segment(m * P, P) = quiet.record.col(1).segment(m * P, P) +
+                                   (m == 4 ? std::sqrt(2.0) : std::sqrt(0.5)) *
+                                       (c.record.col(1).segment(m * P, P) - quiet.record.col(1).segment(m * P, P));
+  const GapReport scaled = diagnose_gap(c.sim_model, rec, 1, c.meta);
+  EXPECT_TRUE(noted(scaled)) << scaled.p_period_power;
+  EXPECT_LT(scaled.p_period_power, scaled.options.effect_alpha);
+}
+
 }  // namespace
 }  // namespace fdsid

@@ -1205,6 +1205,32 @@ void detection_tests(const Diagnosis& dg, const Spectra& s, const Augment& a0, c
   if (s.ne.size() < 4) rep.notes.push_back("fewer than 4 unexcited lines inside the band: nonlinearity not testable");
 }
 
+// Equal noise power per period (gap.hpp: period_power_test) on the consecutive
+// lines 1 … P/2, periods first … M−1: after the first period (which may hold the
+// transient the leakage test looks for) and after any further periods the
+// transient still reaches (transient_periods), so that a slow transient is
+// not read as noise of unequal power. A note when p < effect_alpha.
+void period_power(const Spectra& s, const Augment& a0, int first, GapReport& rep) {
+  const Eigen::VectorXcd G = a0.G();
+  Eigen::MatrixXcd res(s.M - first, static_cast<Eigen::Index>(s.all.size()));
+  for (Eigen::Index i = 0; i < res.cols(); ++i) {
+    const int k = s.all[static_cast<size_t>(i)];
+    for (int m = first; m < s.M; ++m) res(m - first, i) = s.Y(m, k) - G(k) * s.U(m, k);
+  }
+  const PeriodPowerTest pp = period_power_test(res);
+  rep.p_period_power = pp.p;
+  rep.period_power = pp.relative;
+  if (pp.p < rep.options.effect_alpha) {
+    const auto [lo, hi] = std::minmax_element(pp.relative.begin(), pp.relative.end());
+    rep.notes.push_back("the noise power differs between periods " + std::to_string(first + 1) + "-" +
+                        std::to_string(s.M) + " of the " + std::to_string(s.M) + " analysed (relative power " +
+                        fmt(*lo, 3) + " to " + fmt(*hi, 3) + ", p " +
+                        (pp.p < 1e-300 ? std::string("< 1e-300") : sci(pp.p, 2)) +
+                        "): every test here assumes equal power in every period, so with this record its p-values "
+                        "come out too small — a gap, band or effect near its threshold may be the noise's doing");
+  }
+}
+
 // The best-linear-approximation view of the model as given (GapDistortion in
 // gap.hpp): the gap on the detection lines, its level and share, and whether
 // the excited lines show more than it.
@@ -1769,6 +1795,34 @@ void conclude(const Spectra& s, const LineStats& st0, const Augment& cur, const 
 
 }  // namespace
 
+PeriodPowerTest period_power_test(const Eigen::MatrixXcd& residuals) {
+  const Eigen::Index R = residuals.rows(), J = residuals.cols() / 2;
+  PeriodPowerTest out;
+  if (R < 3 || J < 30) return out;
+  Eigen::VectorXd Q = Eigen::VectorXd::Zero(R);
+  double v = 0;
+  Eigen::Index used = 0;
+  for (Eigen::Index j = 0; j < J; ++j) {
+    const Eigen::VectorXcd e = residuals.col(2 * j) - residuals.col(2 * j + 1);  // the leakage term cancels
+    const Eigen::VectorXcd d = e.array() - e.mean();
+    const double total = d.squaredNorm();
+    if (!(total > 0)) continue;  // a pair without noise (exactly periodic) says nothing
+    const Eigen::VectorXd q = d.cwiseAbs2() / total;
+    Q += q;
+    v += (q.array() - 1.0 / static_cast<double>(R)).square().sum();
+    ++used;
+  }
+  if (used < 30 || !(v > 0)) return out;
+  Q /= static_cast<double>(used);
+  v /= static_cast<double>(used * R);
+  const double Rd = static_cast<double>(R);
+  const double S = static_cast<double>(used) * (Rd - 1) / (v * Rd) * (Q.array() - 1 / Rd).square().sum();
+  out.p = boost::math::cdf(boost::math::complement(boost::math::chi_squared(Rd - 1), S));
+  out.relative.resize(static_cast<size_t>(R));
+  for (Eigen::Index m = 0; m < R; ++m) out.relative[static_cast<size_t>(m)] = Rd * Q(m);
+  return out;
+}
+
 /// Sim-to-real gap diagnosis (gap.hpp; CONTRACTS.md `fdsid gap`).
 ///
 /// Method: the per-period DFT of the record; t(k) and the gap of the model as
@@ -1800,6 +1854,7 @@ GapReport diagnose_gap(const StateSpace& model, const Eigen::MatrixXd& record, i
 
   rep.candidates = fits_alone(dg, s, a0, st0.pooled_cost, rep.p_nonlinearity);
   const int drop = transient_periods(dg, s, a0, rep.p_leakage, options.alpha);
+  period_power(s, a0, std::max(1, drop), rep);
   rep.candidates.push_back(leakage_alone(s, a0, drop, rep.p_leakage));
   for (EffectFit& f : rep.candidates) f.shrink = 1.0 - f.gap_after / rep.gap_before;
   std::stable_sort(rep.candidates.begin(), rep.candidates.end(),
@@ -1843,6 +1898,8 @@ nlohmann::json gap_report_to_json(const GapReport& r) {
   j["tests"] = {{"p_gap", r.p_gap},
                 {"p_nonlinearity", r.p_nonlinearity},
                 {"p_leakage", r.p_leakage},
+                {"p_period_power", r.p_period_power},
+                {"period_power", r.period_power},
                 {"alpha", r.options.alpha},
                 {"effect_alpha", r.options.effect_alpha},
                 {"min_share", r.options.min_share},

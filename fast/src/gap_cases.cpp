@@ -795,8 +795,9 @@ void validate_options(const GapCaseOptions& o) {
       fail("the measured noise has period " + std::to_string(mn.period) + ", the case " + std::to_string(o.period) +
            ": use the noise record's period");
     if (static_cast<std::size_t>(o.periods) > mn.periods.size())
-      fail("the measured noise holds " + std::to_string(mn.periods.size()) + " noise periods (two measured periods each), the case needs " +
-           std::to_string(o.periods) + ": use fewer periods or add noise records");
+      fail("the measured noise holds " + std::to_string(mn.periods.size()) +
+           " noise periods (two measured periods each), the case needs " + std::to_string(o.periods) +
+           ": use fewer periods or add noise records");
   }
 }
 
@@ -1178,7 +1179,8 @@ void add_measured_noise(MeasuredNoise& pool, const Eigen::VectorXd& column, cons
   const double r = std::sqrt(0.5);
   for (Eigen::Index m = 0; m + 1 < column.size() / P; m += 2) {
     std::vector<double> n(static_cast<std::size_t>(P));
-    for (Eigen::Index t = 0; t < P; ++t) n[static_cast<std::size_t>(t)] = r * (column(m * P + t) - column((m + 1) * P + t));
+    for (Eigen::Index t = 0; t < P; ++t)
+      n[static_cast<std::size_t>(t)] = r * (column(m * P + t) - column((m + 1) * P + t));
     pool.periods.push_back(std::move(n));
   }
   pool.sources.push_back(source);

@@ -240,6 +240,13 @@ struct GapReport {
   int periods_used = 0;                            ///< M after dropping transient periods
   int excited = 0, unexcited = 0;                  ///< lines in each test
   double p_gap = 1, p_nonlinearity = 1, p_leakage = 1;  ///< detection tests on the model as given
+  /// Whether the periods after the first carry the same noise power
+  /// (period_power_test below, on lines 1 … P/2): the tests above assume
+  /// they do. p < effect_alpha adds a note. Relative power per period, the
+  /// first and any further periods a detected transient reaches left out
+  /// (the leakage test's); empty with < 3 left.
+  double p_period_power = 1;
+  std::vector<double> period_power;
   GapDistortion distortion;                        ///< the best-linear-approximation view (model as given)
   GapOptions options;
   /// Plot-ready table over the excited lines: frequency (Hz), t(k) of the model
@@ -253,6 +260,38 @@ struct GapReport {
   std::vector<std::pair<std::string, Eigen::VectorXd>> steps;
   std::vector<std::string> notes;
 };
+
+/// Equal noise power in every period (issue 17: real noise is not
+/// stationary; "say that the periods disagree for another reason").
+/// `residuals`: R × K, row m the residual spectrum Y_m(k) − G(k) U_m(k) of
+/// period m at K consecutive DFT lines (column j: line k₀ + j).
+/// Lines are first differenced in disjoint adjacent pairs, e_m(j) =
+/// r_m(2j) − r_m(2j+1): the DFT of one period of coloured noise (or of the
+/// response to input noise) carries, besides H(k)E_m(k), a leakage term
+/// T_m(z_k)/A(z_k) set by the filter's state at the period's ends — one
+/// random value per period, smooth in k and common to all lines, so the lines
+/// are far from independent where it dominates (below the noise's spectral
+/// peaks: a generated effect-free case with 46 dB of noise-spectrum range gave
+/// p 1.7e-8 undifferenced, 0.77 differenced). The difference of adjacent
+/// lines cancels it to first order; disjoint pairs keep the pairs independent.
+/// Per pair the deviations d_m = e_m − ē over the R periods give shares
+/// q_m(j) = |d_m|² / Σ_m |d_m|², which a periodic model error, the line's
+/// noise level and a common scale leave alone; with noise of equal power,
+/// independent from period to period, q(j) is exchangeable, so E q_m = 1/R
+/// and Cov(q) = v R/(R−1) (I − 11ᵀ/R), v = Var q_m. Q_m, the mean of q_m
+/// over the J independent pairs, is then normal for large J with covariance
+/// Cov(q)/J, whose pseudo-inverse gives
+///   S = J (R−1) / (v R) · Σ_m (Q_m − 1/R)²  ~  χ²(R − 1),
+/// v estimated by the mean of (q_m(j) − 1/R)² over all m, j (exact under the
+/// null; under unequal power it only grows, so the test errs to the safe
+/// side). Only J ≥ 30 pairs and R ≥ 3 periods are tested (p = 1 otherwise):
+/// the normal limit needs many pairs, and two periods have q ≡ 1/2.
+/// relative[m] = R Q_m: 1 each under the null.
+struct PeriodPowerTest {
+  double p = 1;
+  std::vector<double> relative;
+};
+PeriodPowerTest period_power_test(const Eigen::MatrixXcd& residuals);
 
 /// Diagnoses the gap between `model` (SISO, discrete or continuous) and the
 /// periodic record (columns u, y; P·M rows) with its meta data. Throws
