@@ -295,6 +295,8 @@ int run_gap_validate(GapValidateCommand c) {
   out << "  gap_after on correct verdicts: median " << rate(j["gap_after_correct"]["median"]) << ", p90 "
       << rate(j["gap_after_correct"]["p90"]) << ", max " << rate(j["gap_after_correct"]["max"])
       << ", share <= 2: " << rate(j["gap_after_correct"]["share_at_most_2"]) << "\n";
+  out << "  noise power differs between periods (noted in the report): " << v.period_power_noted << " of " << v.cases
+      << " cases, " << v.false_alarms_noted << " of the " << v.false_alarms << " false alarms\n";
   out << "confusion (truth -> verdict: count):\n";
   for (const auto& t : v.confusion)
     for (const auto& p : t.second)

@@ -810,6 +810,11 @@ TEST_F(CliFrf, GapValidateScoresBlindCases) {
   EXPECT_EQ(j["rows"].size(), 20u);
   EXPECT_EQ(j["by_category"]["none"]["cases"], 2);
   EXPECT_EQ(r.status == 0, j["targets"]["met"].get<bool>());
+  int noted = 0;  // the equal-noise-power note: p < effect_alpha (1e-3) in the row
+  for (const auto& row : j["rows"]) noted += row["p_period_power"].get<double>() < 1e-3;
+  EXPECT_EQ(j["period_power_noted"]["cases"], noted);
+  EXPECT_NE(r.out.find("noise power differs between periods (noted in the report): " + std::to_string(noted) + " of 20"),
+            std::string::npos) << describe(r);
   EXPECT_TRUE(IsBadInput(run_fdsid({"gap-validate", "--cases", "0"}), {}));
 }
 
@@ -817,14 +822,19 @@ TEST_F(CliFrf, GapValidateScoresBlindCases) {
 // any header, their period taken, M the pool's size up to 8, the JSON saying
 // so; the mis-meant forms refused before any case (exit 2, one line naming
 // the option). The record here: 16 periods of P = 128, a periodic column plus
-// noise (pool of 8); what the cases score is not checked (2 cases).
+// noise (pool of 8) whose standard deviation is 3 × larger in periods 9-16,
+// so the pool's first four noise periods have 1/9 the power of the last
+// four: every case's report must note that the noise power differs between
+// periods (period_power_test, 32 line pairs: the shares of the low periods
+// fall from 1/8 to ~1/40 — S in the hundreds against χ²(R − 1)); what the
+// cases score is not checked (2 cases).
 TEST_F(CliFrf, GapValidateOnMeasuredNoise) {
   const int P = 128, periods = 16;
   std::string csv = "Force,Accel,Fs\n";
   std::mt19937_64 g(3);
   std::normal_distribution<double> normal;
   for (int t = 0; t < P * periods; ++t)
-    csv += std::to_string(std::cos(2 * M_PI * (t % P) / P)) + "," + std::to_string(std::sin(2 * M_PI * (t % P) / P) + 0.01 * normal(g)) +
+    csv += std::to_string(std::cos(2 * M_PI * (t % P) / P)) + "," + std::to_string(std::sin(2 * M_PI * (t % P) / P) + (t < 8 * P ? 0.01 : 0.03) * normal(g)) +
            (t == 0 ? ",400\n" : ",\n");
   write("noise.csv", csv);
   write("noise.meta.json", "{\"period\": 128, \"periods\": 16, \"sample_time\": 0.0025, \"excited_lines\": [1]}");
@@ -842,6 +852,8 @@ TEST_F(CliFrf, GapValidateOnMeasuredNoise) {
   const json j = read_json("m.json");
   EXPECT_TRUE(j["noise"]["measured"].get<bool>());
   EXPECT_EQ(j["noise"]["pool"], 8);
+  EXPECT_EQ(j["period_power_noted"]["cases"], 2);
+  for (const auto& row : j["rows"]) EXPECT_LT(row["p_period_power"].get<double>(), 1e-3) << row.dump();
   EXPECT_TRUE(IsBadInput(with({"--period", "256"}), {"--period", "128"}));
   EXPECT_TRUE(IsBadInput(with({"--periods", "9"}), {"--periods", "8"}));
   EXPECT_TRUE(IsBadInput(with({"--noise-skip-periods", "9"}), {"--noise-from", "4"}));

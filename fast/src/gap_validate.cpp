@@ -98,6 +98,8 @@ GapValidationCase run_case(const GapValidationOptions& o, int i, const std::file
     }
     r.gap_before = rep.gap_before;
     r.gap_after = rep.gap_after;
+    r.p_period_power = rep.p_period_power;
+    r.period_power_noted = rep.p_period_power < rep.options.effect_alpha;
     const double Ts = meta.sample_time;
     for (const auto& tb : c.bands) {  // truth in cycles/sample, report in Hz
       bool hit = false;
@@ -170,9 +172,11 @@ GapValidation validate_gap(const GapValidationOptions& o) {
     c[0] += r.correct;
     ++c[1];
     v.correct_up_to_alternatives[r.category] += r.correct_up_to_alternatives;
+    v.period_power_noted += r.period_power_noted;
     if (r.category == "none") {
       ++none;
       alarms += r.verdict != "none";
+      v.false_alarms_noted += r.verdict != "none" && r.period_power_noted;
     } else {
       bands += r.truth_bands;
       hits += r.bands_hit;
@@ -181,6 +185,7 @@ GapValidation validate_gap(const GapValidationOptions& o) {
   }
   std::sort(v.gap_after_correct.begin(), v.gap_after_correct.end());
   v.accuracy = static_cast<double>(correct) / o.cases;
+  v.false_alarms = alarms;
   v.false_alarm_rate = none ? static_cast<double>(alarms) / none : 0.0;
   v.band_hit_rate = bands ? static_cast<double>(hits) / bands : 0.0;
   return v;
@@ -241,6 +246,7 @@ nlohmann::json gap_validation_to_json(const GapValidation& v) {
   j["noise"] = v.noise_sources.empty()
                    ? nlohmann::json{{"measured", false}}
                    : nlohmann::json{{"measured", true}, {"sources", v.noise_sources}, {"pool", v.noise_pool}};
+  j["period_power_noted"] = {{"cases", v.period_power_noted}, {"false_alarms", v.false_alarms_noted}};
   const auto& g = v.gap_after_correct;
   auto q = [&](double p) { return g.empty() ? NAN : g[static_cast<size_t>(p * (g.size() - 1))]; };
   j["gap_after_correct"] = {{"n", g.size()},     {"median", q(0.5)}, {"p90", q(0.9)},
@@ -255,7 +261,8 @@ nlohmann::json gap_validation_to_json(const GapValidation& v) {
     nlohmann::json row = {{"index", r.index},         {"seed", r.seed},           {"category", r.category},
                           {"truth", r.truth},         {"verdict", r.verdict},     {"correct", r.correct},
                           {"gap_before", r.gap_before}, {"gap_after", r.gap_after}, {"truth_bands", r.truth_bands},
-                          {"bands_hit", r.bands_hit}, {"correct_up_to_alternatives", r.correct_up_to_alternatives}};
+                          {"bands_hit", r.bands_hit}, {"correct_up_to_alternatives", r.correct_up_to_alternatives},
+                          {"p_period_power", r.p_period_power}};
     if (!r.error.empty()) row["error"] = r.error;
     j["rows"].push_back(row);
   }

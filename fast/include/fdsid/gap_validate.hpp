@@ -59,6 +59,10 @@ struct GapValidationCase {
   bool correct_up_to_alternatives = false;
   double gap_before = 0, gap_after = 0;
   int truth_bands = 0, bands_hit = 0;  ///< truth bands overlapped by a reported band
+  /// The report's equal-noise-power-per-period test (GapReport::p_period_power)
+  /// and whether it was noted (p < effect_alpha).
+  double p_period_power = 1;
+  bool period_power_noted = false;
   std::string error;      ///< the diagnosis refused the case (counted as wrong)
 };
 
@@ -70,6 +74,10 @@ struct GapValidation {
   std::map<std::string, int> correct_up_to_alternatives;         ///< category → cases (GapValidationCase)
   double false_alarm_rate = 0;  ///< effect-free cases with a non-empty verdict
   double band_hit_rate = 0;     ///< truth bands hit / truth bands, over cases with effects
+  int false_alarms = 0;         ///< effect-free cases with a non-empty verdict
+  /// Cases whose report notes that the noise power differs between periods,
+  /// and how many of the false alarms carry that note.
+  int period_power_noted = 0, false_alarms_noted = 0;
   std::vector<double> gap_after_correct;  ///< sorted, correct verdicts with effects
   std::vector<GapValidationCase> rows;
   std::vector<std::string> noise_sources;  ///< measured noise's records (empty: synthetic noise)
