@@ -244,7 +244,8 @@ struct GapReport {
   /// (period_power_test below, on lines 1 … P/2): the tests above assume
   /// they do. p < effect_alpha adds a note. Relative power per period, the
   /// first and any further periods a detected transient reaches left out
-  /// (the leakage test's); empty with < 3 left.
+  /// (the leakage test's); empty (and p = 1) with < 3 periods left or < 30
+  /// line pairs carrying noise (period_power_test).
   double p_period_power = 1;
   std::vector<double> period_power;
   GapDistortion distortion;                        ///< the best-linear-approximation view (model as given)
