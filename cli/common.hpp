@@ -23,9 +23,11 @@ namespace fdsid::cli {
 /// action (validation, then work). Each subcommand's parse callback sets it.
 using Action = std::function<int()>;
 
-/// Registers `sub` to run `run(options)` with its own options object.
-template <class Options, class Run>
-void on_parsed(CLI::App* sub, std::shared_ptr<Options> options, Action& chosen, Run run) {
+/// Registers `sub` to run `run(options)` with its own options object. `run`
+/// is a function of Options, so that each file's `run` is picked by its
+/// parameter type (the cli/ files are compiled as one unit: CMakeLists.txt).
+template <class Options>
+void on_parsed(CLI::App* sub, std::shared_ptr<Options> options, Action& chosen, int (*run)(const Options&)) {
   sub->callback([options, &chosen, run] { chosen = [options, run] { return run(*options); }; });
 }
 

@@ -263,7 +263,8 @@ int run_gap(const GapCommand& c) {
   return 0;
 }
 
-int run_gap_validate(GapValidateCommand c) {
+int run_gap_validate(const GapValidateCommand& given) {
+  GapValidateCommand c = given;  // its options gain the progress callback and the noise pool
   GapValidationOptions& o = c.options;
   read_noise_pool(c);
   if (static_cast<long long>(o.period) * o.periods > 10000000LL)

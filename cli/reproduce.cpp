@@ -50,7 +50,8 @@ int run_table1(const Table1Command& c) {
   return 0;
 }
 
-int run_table2(Table2Command c) {
+int run_table2(const Table2Command& given) {
+  Table2Command c = given;  // its options gain the progress callback
   check_outputs(c.json_path, c.plot_path);
   Out out{c.json_path == "-"};
   Table2Options& o = c.options;
@@ -83,7 +84,8 @@ int run_table2(Table2Command c) {
   return 0;
 }
 
-int run_figure(FigureCommand c) {
+int run_figure(const FigureCommand& given) {
+  FigureCommand c = given;  // its options gain the progress callback
   check_outputs(c.json_path, c.plot_path);
   Out out{c.json_path == "-"};
   FigureOptions& o = c.options;

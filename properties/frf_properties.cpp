@@ -50,17 +50,6 @@ rc::Gen<Eigen::VectorXd> gen_five_decades(int F, double lo) {
   });
 }
 
-rc::Gen<Eigen::MatrixXd> gen_similarity(int n) {
-  auto raw = rc::gen::map(rc::gen::container<std::vector<double>>(n * n, gen_unit_interval()), [n](const std::vector<double>& v) {
-    Eigen::MatrixXd T = Eigen::MatrixXd::Identity(n, n) + 0.3 * Eigen::Map<const Eigen::MatrixXd>(v.data(), n, n);
-    return T;
-  });
-  return rc::gen::suchThat(raw, [](const Eigen::MatrixXd& T) {
-    const Eigen::VectorXd s = fdsid::testing::singular_values(Eigen::MatrixXd(T));
-    return s(0) / s(s.size() - 1) <= 10.0;
-  });
-}
-
 // Shows the margins reached: worst error / tolerance of G and of the poles.
 void tag_margin(const char* what, double ratio) {
   const std::string w(what);

@@ -6,6 +6,7 @@
 #include <rapidcheck.h>
 
 #include "generators.hpp"
+#include "linalg.hpp"
 
 namespace fdsid::testing {
 
@@ -20,6 +21,20 @@ inline rc::Gen<Mode> gen_mode() {
 
 inline rc::Gen<double> gen_unit_interval() {
   return rc::gen::map(rc::gen::inRange(-100, 101), [](int v) { return v / 100.0; });
+}
+
+/// Random well-conditioned similarity: T = I + 0.3 X, X with entries in
+/// [-1, 1] on the grid of gen_unit_interval (shrinking towards X = 0, T = I),
+/// accepted when cond₂(T) <= 10.
+inline rc::Gen<Eigen::MatrixXd> gen_similarity(int n) {
+  auto raw = rc::gen::map(rc::gen::container<std::vector<double>>(n * n, gen_unit_interval()), [n](const std::vector<double>& v) {
+    Eigen::MatrixXd T = Eigen::MatrixXd::Identity(n, n) + 0.3 * Eigen::Map<const Eigen::MatrixXd>(v.data(), n, n);
+    return T;
+  });
+  return rc::gen::suchThat(raw, [](const Eigen::MatrixXd& T) {
+    const Eigen::VectorXd s = singular_values(Eigen::MatrixXd(T));
+    return s(0) / s(s.size() - 1) <= 10.0;
+  });
 }
 
 /// Systems of order 1..max_order with 1..max_channels channels meeting

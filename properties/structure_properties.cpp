@@ -23,16 +23,6 @@ Eigen::MatrixXd matrix_power(const Eigen::MatrixXd& A, int k) {
 double sigma_min(const Eigen::MatrixXd& X) { return fdsid::testing::singular_values(Eigen::MatrixXd(X)).minCoeff(); }
 double norm2(const Eigen::MatrixXd& X) { return fdsid::testing::singular_values(Eigen::MatrixXd(X))(0); }
 
-// Random well-conditioned similarity: T = I + 0.3 X, X with entries in [-1, 1],
-// accepted when cond(T) <= 10.
-rc::Gen<Eigen::MatrixXd> gen_similarity(int n) {
-  auto raw = rc::gen::map(rc::gen::container<std::vector<double>>(n * n, gen_unit_interval()), [n](const std::vector<double>& v) {
-    Eigen::MatrixXd T = Eigen::MatrixXd::Identity(n, n) + 0.3 * Eigen::Map<const Eigen::MatrixXd>(v.data(), n, n);
-    return T;
-  });
-  return rc::gen::suchThat(raw, [](const Eigen::MatrixXd& T) { return norm2(T) / sigma_min(T) <= 10.0; });
-}
-
 RC_GTEST_PROP(Table1RankCollapse, VanOversheeLosesRankAkcayDoesNot, ()) {
   const SystemSpec spec = *gen_system_spec();
   const StateSpace sys = make_system(spec);

@@ -8,6 +8,7 @@
 
 #include "fdsid/error.hpp"
 #include "numerics/fft.hpp"
+#include "numerics/random.hpp"
 
 namespace fdsid {
 
@@ -32,6 +33,7 @@ std::array<double, 2> gap_ratio_range(Strength s) {
 namespace {
 
 using json = nlohmann::json;
+using numerics::splitmix64;
 constexpr double kPi = M_PI;
 constexpr double kTwoPi = 2 * M_PI;
 const char* const kWhere = "gap case";
@@ -66,13 +68,6 @@ class Draw {
   bool spare_ = false;
   double spare_value_ = 0;
 };
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
 
 // ---------------------------------------------------------------------------
 // Second-order sections in q = z^{-1}: (b0 + b1 q + b2 q²) / (1 + a1 q + a2 q²).

@@ -13,23 +13,19 @@
 #include "fdsid/error.hpp"
 #include "progress.hpp"
 #include "numerics/eigen_instances.hpp"
+#include "numerics/random.hpp"
 
 namespace fdsid {
 
 namespace {
+
+using numerics::splitmix64;
 
 Eigen::MatrixXd from_strings(int rows, int cols, const std::vector<const char*>& entries) {
   Eigen::MatrixXd M(rows, cols);
   for (int i = 0; i < rows; ++i)
     for (int j = 0; j < cols; ++j) M(i, j) = std::strtod(entries[static_cast<size_t>(i * cols + j)], nullptr);
   return M;
-}
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
 }
 
 double mean(const std::vector<double>& v) {

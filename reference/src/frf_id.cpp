@@ -274,7 +274,7 @@ PolynomialBasis algorithm2_2_orthonormal_basis(const std::vector<Complex>& xi,
 // Algorithm 1, steps 1a-3
 
 // The matrices of step 1a.
-struct DataMatrices {
+struct FrfDataMatrices {
   MatrixR U_re, Y_re;  // 𝐔^re, 𝐘^re of Eq. (11): [Re 𝐔, Im 𝐔], [Re 𝐘, Im 𝐘]
   MatrixR C_Y;         // C_Y = Re(𝐂𝐂ᴴ) of Eq. (18)
 };
@@ -285,11 +285,11 @@ struct DataMatrices {
 // imaginary parts side by side (Eq. 11); C_Y = Σ_{k,j} Re((W_r W_rᴴ) ⊗
 // diag σ²(k, j)). Numerical aspects: O(F c r² p) for C_Y. Fails: never.
 // References: Pintelon (2002) Eqs. (9), (11), (18).
-DataMatrices step1a_data_matrices(const FrfData& d, const Shape& s, const MatrixC& rows_u,
+FrfDataMatrices step1a_data_matrices(const FrfData& d, const Shape& s, const MatrixC& rows_u,
                                   const MatrixC& rows_y, int r) {
   const int F = s.F, m = s.m, p = s.p, c = s.c;
   const int cols = F * c;  // complex block columns of Eq. (9)
-  DataMatrices z{MatrixR(r * m, 2 * cols), MatrixR(r * p, 2 * cols), MatrixR::Zero(r * p, r * p)};
+  FrfDataMatrices z{MatrixR(r * m, 2 * cols), MatrixR(r * p, 2 * cols), MatrixR::Zero(r * p, r * p)};
   for (int k = 0; k < F; ++k) {
     const MatrixC wu = rows_u.col(k), wy = rows_y.col(k);
     for (int j = 0; j < c; ++j) {
@@ -319,7 +319,7 @@ struct Perturbation {
   unsigned seed = 1;
 };
 
-void perturb(DataMatrices& z, const Perturbation& pert) {
+void perturb(FrfDataMatrices& z, const Perturbation& pert) {
   std::mt19937_64 rng(pert.seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   auto direction = [&](Eigen::Index rows, Eigen::Index cols) {
@@ -499,7 +499,7 @@ Estimate estimate_of(const Model& m, const std::vector<Real>& singular_values) {
 Estimate algorithm1(const FrfData& d, const Shape& s, const std::vector<Complex>& xi,
                     const MatrixC& rows_u, const MatrixC& rows_y, const MatrixR* H, const Real& q0,
                     int n, int r, const Perturbation& pert) {
-  DataMatrices z = step1a_data_matrices(d, s, rows_u, rows_y, r);
+  FrfDataMatrices z = step1a_data_matrices(d, s, rows_u, rows_y, r);
   if (pert.size > 0) perturb(z, pert);
   const MatrixR YPi = step1b_eliminate_input(z.U_re, z.Y_re, r, s.m);
   const ObservabilityEstimate O = step1c_noise_weighted_svd(z.C_Y, YPi, n);

@@ -28,7 +28,7 @@
 #include <string>
 #include <vector>
 
-namespace {
+namespace frf_reference_test {  // named: the reference_test binary is one unit (reference/CMakeLists.txt)
 
 using namespace fdsid::reference;
 

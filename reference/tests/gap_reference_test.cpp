@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-namespace {
+namespace gap_reference_test {  // named: the reference_test binary is one unit (reference/CMakeLists.txt)
 
 using namespace fdsid::reference;
 
