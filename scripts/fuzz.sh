@@ -23,7 +23,10 @@ esac
 
 start=$(date +%s)
 echo "== configure and build $BUILD (clang, -fsanitize=fuzzer,address,undefined)"
-CC="${CC:-clang}" CXX="${CXX:-clang++}" cmake -S "$ROOT" -B "$BUILD" -DFDSID_FUZZ=ON \
+# Ninja for a new build folder (scripts/test-all.sh says why); an existing one keeps its generator.
+GENERATOR=()
+[ -f "$BUILD/CMakeCache.txt" ] || GENERATOR=(-G Ninja)
+CC="${CC:-clang}" CXX="${CXX:-clang++}" cmake -S "$ROOT" -B "$BUILD" "${GENERATOR[@]}" -DFDSID_FUZZ=ON \
   -DFDSID_BUILD_TESTS=OFF -DFDSID_BUILD_BENCH=OFF >/dev/null || { echo "configure failed" >&2; exit 2; }
 cmake --build "$BUILD" -j"$JOBS" --target "${TARGETS[@]}" || { echo "build failed" >&2; exit 2; }
 built=$(date +%s)

@@ -6,7 +6,7 @@ SUDO=""
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
 $SUDO apt-get install -y -qq --no-install-recommends \
-  build-essential cmake pkg-config git \
+  build-essential cmake ninja-build pkg-config git \
   libeigen3-dev libfftw3-dev nlohmann-json3-dev libcli11-dev \
   libgtest-dev libbenchmark-dev librapidcheck-dev libboost-dev gcovr \
   libplplot-dev plplot-driver-cairo libceres-dev \

@@ -523,6 +523,9 @@ void expect_gap_fields(const json& j) {
                                              "sensor_dynamics", "unmodelled_mode"}));
   for (size_t i = 1; i < j["candidates"].size(); ++i)  // best first
     EXPECT_LE(j["candidates"][i - 1]["gap_after"].get<double>(), j["candidates"][i]["gap_after"].get<double>());
+  // the equal-noise-power decision is the one its p and effect_alpha give
+  const json& t = j["tests"];
+  EXPECT_EQ(t["period_power_unequal"].get<bool>(), t["p_period_power"].get<double>() < t["effect_alpha"].get<double>());
 }
 
 TEST_F(CliFrf, GapOfTheRightModelIsNoiseAlone) {

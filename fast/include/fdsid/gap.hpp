@@ -248,6 +248,9 @@ struct GapReport {
   /// line pairs carrying noise (period_power_test).
   double p_period_power = 1;
   std::vector<double> period_power;
+  /// The decision on p_period_power (< effect_alpha): the report carries the
+  /// note, gap-validate counts the case as noted.
+  bool period_power_unequal = false;
   GapDistortion distortion;                        ///< the best-linear-approximation view (model as given)
   GapOptions options;
   /// Plot-ready table over the excited lines: frequency (Hz), t(k) of the model
