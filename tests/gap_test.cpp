@@ -748,7 +748,7 @@ TEST(GapDiagnosis, UnequalNoisePowerPerPeriodIsNoted) {
   };
   const GapReport plain = diagnose_gap(c.sim_model, c.record, 1, c.meta);
   EXPECT_FALSE(noted(plain)) << plain.p_period_power;
-  EXPECT_FALSE(plain.period_power_unequal);
+  EXPECT_FALSE(plain.period_power_unequal());
   EXPECT_EQ(plain.period_power.size(), static_cast<size_t>(c.meta.periods - 1));
   Eigen::MatrixXd rec = c.record;
   const Eigen::Index P = c.meta.period;
@@ -759,7 +759,7 @@ TEST(GapDiagnosis, UnequalNoisePowerPerPeriodIsNoted) {
   const GapReport scaled = diagnose_gap(c.sim_model, rec, 1, c.meta);
   EXPECT_TRUE(noted(scaled)) << scaled.p_period_power;
   EXPECT_LT(scaled.p_period_power, scaled.options.effect_alpha);
-  EXPECT_TRUE(scaled.period_power_unequal);
+  EXPECT_TRUE(scaled.period_power_unequal());
 }
 
 }  // namespace

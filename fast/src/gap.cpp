@@ -1220,8 +1220,7 @@ void period_power(const Spectra& s, const Augment& a0, int first, GapReport& rep
   const PeriodPowerTest pp = period_power_test(res);
   rep.p_period_power = pp.p;
   rep.period_power = pp.relative;
-  rep.period_power_unequal = pp.p < rep.options.effect_alpha;
-  if (rep.period_power_unequal) {
+  if (rep.period_power_unequal()) {
     const auto [lo, hi] = std::minmax_element(pp.relative.begin(), pp.relative.end());
     rep.notes.push_back("the noise power differs between periods " + std::to_string(first + 1) + "-" +
                         std::to_string(s.M) + " of the " + std::to_string(s.M) + " analysed (relative power " +
@@ -1901,7 +1900,7 @@ nlohmann::json gap_report_to_json(const GapReport& r) {
                 {"p_leakage", r.p_leakage},
                 {"p_period_power", r.p_period_power},
                 {"period_power", r.period_power},
-                {"period_power_unequal", r.period_power_unequal},
+                {"period_power_unequal", r.period_power_unequal()},
                 {"alpha", r.options.alpha},
                 {"effect_alpha", r.options.effect_alpha},
                 {"min_share", r.options.min_share},

@@ -99,7 +99,7 @@ GapValidationCase run_case(const GapValidationOptions& o, int i, const std::file
     r.gap_before = rep.gap_before;
     r.gap_after = rep.gap_after;
     r.p_period_power = rep.p_period_power;
-    r.period_power_noted = rep.period_power_unequal;
+    r.period_power_noted = rep.period_power_unequal();
     const double Ts = meta.sample_time;
     for (const auto& tb : c.bands) {  // truth in cycles/sample, report in Hz
       bool hit = false;

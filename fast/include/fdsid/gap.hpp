@@ -248,9 +248,6 @@ struct GapReport {
   /// line pairs carrying noise (period_power_test).
   double p_period_power = 1;
   std::vector<double> period_power;
-  /// The decision on p_period_power (< effect_alpha): the report carries the
-  /// note, gap-validate counts the case as noted.
-  bool period_power_unequal = false;
   GapDistortion distortion;                        ///< the best-linear-approximation view (model as given)
   GapOptions options;
   /// Plot-ready table over the excited lines: frequency (Hz), t(k) of the model
@@ -263,6 +260,10 @@ struct GapReport {
   /// The last equals t_after. For the figure of `fdsid gap --plot`.
   std::vector<std::pair<std::string, Eigen::VectorXd>> steps;
   std::vector<std::string> notes;
+  /// The decision on p_period_power: unequal noise power per period when
+  /// p < effect_alpha; the report then carries the note, gap-validate counts
+  /// the case as noted.
+  bool period_power_unequal() const { return p_period_power < options.effect_alpha; }
 };
 
 /// Equal noise power in every period (issue 17: real noise is not
