@@ -9,6 +9,7 @@
 #include <set>
 
 #include "fdsid/error.hpp"
+#include "numerics/complex.hpp"
 #include "numerics/constants.hpp"
 #include "numerics/fft.hpp"
 #include "fdsid/format.hpp"
@@ -60,17 +61,12 @@ class Resolvent {
       K.setZero(p, n);
       cplx* k = K.data();  // column-major p × n
       for (Eigen::Index e = 0; e < n; ++e) {
-        // 1/(ξ − λ) as conj/|·|², not std::complex's division (a libgcc call
-        // that guards against overflow: a tenth of `reproduce fig1`); |ξ − λ|²
-        // underflows only for |ξ − λ| < 1e-154, where ξI − A is singular anyway.
-        const cplx x = xi - lambda_(e);
-        const double x2 = std::norm(x);
-        const cplx de = std::conj(x) / x2;
-        if (!(x2 > 0) || !std::isfinite(de.real()) || !std::isfinite(de.imag())) return false;
+        cplx de;
+        if (!modal_factor(xi, e, de)) return false;
         const cplx* v = Vinv_.data() + e * n;  // row e of V⁻¹ (row-major)
         for (Eigen::Index a = 0; a < p; ++a) {
-          const cplx ce = CV_(a, e) * de;
-          for (Eigen::Index j = 0; j < n; ++j) k[a + p * j] += ce * v[j];
+          const cplx ce = numerics::multiply(CV_(a, e), de);
+          for (Eigen::Index j = 0; j < n; ++j) k[a + p * j] += numerics::multiply(ce, v[j]);
         }
       }
       return K.allFinite();
@@ -81,6 +77,46 @@ class Resolvent {
     K = lu.solve(C_.transpose().cast<cplx>()).transpose();
     return K.allFinite();
   }
+  /// G = C (ξI − A)⁻¹ B + D (p × m) for the B and D given to set_input; on the
+  /// diagonal route Σ_e (CV)_{:,e} (V⁻¹B)_{e,:} / (ξ − λ_e) without forming
+  /// K (O(n p m) per frequency, nothing allocated once G has its size).
+  /// Returns false when ξI − A is singular.
+  void set_input(const Eigen::MatrixXd& B, const Eigen::MatrixXd& D) {
+    B_ = B.cast<cplx>();
+    D_ = D.cast<cplx>();
+    if (diagonal_) VinvB_ = Vinv_ * B_;
+  }
+  bool response(cplx xi, Eigen::MatrixXcd& G, Eigen::MatrixXcd& K) const {
+    G = D_;
+    if (A_.rows() == 0) return true;
+    if (!diagonal_) {
+      if (!left(xi, K)) return false;
+      G.noalias() += K * B_;
+      return G.allFinite();
+    }
+    const Eigen::Index p = CV_.rows(), n = CV_.cols(), m = VinvB_.cols();
+    cplx* g = G.data();  // column-major p × m
+    for (Eigen::Index e = 0; e < n; ++e) {
+      cplx de;
+      if (!modal_factor(xi, e, de)) return false;
+      for (Eigen::Index a = 0; a < p; ++a) {
+        const cplx ce = numerics::multiply(CV_(a, e), de);
+        for (Eigen::Index j = 0; j < m; ++j) g[a + p * j] += numerics::multiply(ce, VinvB_(e, j));
+      }
+    }
+    return G.allFinite();
+  }
+
+ private:
+  // 1/(ξ − λ_e) as conj/|·|², not std::complex's division (a libgcc call that
+  // guards against overflow: a tenth of `reproduce fig1`); |ξ − λ|²
+  // underflows only for |ξ − λ| < 1e-154, where ξI − A is singular anyway.
+  bool modal_factor(cplx xi, Eigen::Index e, cplx& de) const {
+    const double xr = xi.real() - lambda_(e).real(), xim = xi.imag() - lambda_(e).imag();
+    const double x2 = xr * xr + xim * xim;
+    de = cplx(xr / x2, -xim / x2);
+    return x2 > 0 && std::isfinite(de.real()) && std::isfinite(de.imag());
+  }
 
  private:
   Eigen::MatrixXd A_, C_;
@@ -88,6 +124,7 @@ class Resolvent {
   Eigen::VectorXcd lambda_;
   Eigen::MatrixXcd CV_;
   Eigen::Matrix<cplx, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Vinv_;  // rows read in left()
+  Eigen::MatrixXcd B_, D_, VinvB_;  // set_input's
 };
 
 // cond₁(R) = ‖R‖₁ ‖R⁻¹‖₁ of an upper-triangular R (within a factor of its
@@ -472,7 +509,7 @@ void step3(const FrfData& d, const Bases& b, const Eigen::MatrixXd& A, const Eig
         for (int f = 0; f < m; ++f) {
           const cplx u = d.U[k](f, j);
           for (int e = 0; e < n; ++e) {
-            const cplx v = wgt * K(a, e) * u;
+            const cplx v = wgt * numerics::multiply(K(a, e), u);
             rows(row, e + n * f) = v.real();
             rows(row + 1, e + n * f) = v.imag();
           }
@@ -640,22 +677,17 @@ namespace {
 // ξI − A is singular.
 class ResponseAt {
  public:
-  explicit ResponseAt(const StateSpace& model)
-      : model_(model), res_(model.A, model.C), B_(model.B.cast<cplx>()), D_(model.D.cast<cplx>()) {}
+  explicit ResponseAt(const StateSpace& model) : discrete_(model.domain == Domain::Discrete), res_(model.A, model.C) {
+    res_.set_input(model.B, model.D);
+  }
   void operator()(double omega, Eigen::MatrixXcd& G) {
-    const cplx xi = model_.domain == Domain::Discrete ? std::polar(1.0, omega) : cplx(0.0, omega);
-    G = D_;
-    if (model_.order() == 0) return;
-    if (res_.left(xi, K_))
-      G.noalias() += K_ * B_;
-    else
-      G.setConstant(cplx(std::numeric_limits<double>::infinity(), 0.0));
+    const cplx xi = discrete_ ? std::polar(1.0, omega) : cplx(0.0, omega);
+    if (!res_.response(xi, G, K_)) G.setConstant(cplx(std::numeric_limits<double>::infinity(), 0.0));
   }
 
  private:
-  const StateSpace& model_;
-  const Resolvent res_;
-  const Eigen::MatrixXcd B_, D_;
+  bool discrete_;
+  Resolvent res_;
   Eigen::MatrixXcd K_;
 };
 
