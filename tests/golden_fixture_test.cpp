@@ -193,6 +193,24 @@ TEST_P(GoldenFixture, FastMatchesReference) {
       w.add(std::abs(actual(i) - expected(i)), tol, "sigma_" + std::to_string(i + 1));
     checks.push_back(w);
   }
+  {
+    // 1b. The singular values identify_spectrum's own step 3 reports (the
+    // eigen-decomposition of 𝒴 where it is symmetric, every SISO fixture with
+    // p = r; Jacobi otherwise), held to Weyl's bound alone, not to the
+    // algorithm's κ-scaled tolerance: the matrix carries ‖δX‖₂ ≤ weyl from the
+    // Fourier coefficients (above), and a backward-stable decomposition adds
+    // ‖E‖₂ ≤ c·(p m)·u·σ1 (spectrum_id.cpp, step 3), c = 1 taken: the
+    // bound is the sum.
+    const double tol = weyl + p * m * kU * sigma_H(0);
+    Worst w;
+    w.what = "identify_spectrum's step 3 singular values";
+    w.derivation = "Weyl: |dsigma_i| <= weyl + (p m) u sigma1 = " + sci(weyl) + " + " + sci(p * m * kU * sigma_H(0)) +
+                   " = " + sci(tol) + ", absolute";
+    ASSERT_EQ(result.singular_values.size(), sigma_H.size()) << w.what;
+    for (Eigen::Index i = 0; i < sigma_H.size(); ++i)
+      w.add(std::abs(result.singular_values(i) - sigma_H(i)), tol, "sigma_" + std::to_string(i + 1));
+    checks.push_back(w);
+  }
 
   // 2. Poles. First order, |δλ_i| <= κ_i ||δÃ||_2 (Wilkinson), κ_i the
   // eigenvalue condition number of Ã = (J_d U_2n)^† J_u U_2n (step 5: the
