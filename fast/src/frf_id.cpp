@@ -57,19 +57,8 @@ class Resolvent {
   /// frequency in step 3 and V_SUB: F = 10⁵ spent 12 % in malloc/free).
   bool left(cplx xi, Eigen::MatrixXcd& K) const {
     if (diagonal_) {
-      const Eigen::Index p = CV_.rows(), n = CV_.cols();
-      K.setZero(p, n);
-      cplx* k = K.data();  // column-major p × n
-      for (Eigen::Index e = 0; e < n; ++e) {
-        cplx de;
-        if (!modal_factor(xi, e, de)) return false;
-        const cplx* v = Vinv_.data() + e * n;  // row e of V⁻¹ (row-major)
-        for (Eigen::Index a = 0; a < p; ++a) {
-          const cplx ce = numerics::multiply(CV_(a, e), de);
-          for (Eigen::Index j = 0; j < n; ++j) k[a + p * j] += numerics::multiply(ce, v[j]);
-        }
-      }
-      return K.allFinite();
+      K.setZero(CV_.rows(), CV_.cols());
+      return add_modal_sum(xi, Vinv_, K);
     }
     Eigen::MatrixXcd M = -A_.transpose().cast<cplx>();
     M.diagonal().array() += xi;
@@ -77,45 +66,46 @@ class Resolvent {
     K = lu.solve(C_.transpose().cast<cplx>()).transpose();
     return K.allFinite();
   }
-  /// G = C (ξI − A)⁻¹ B + D (p × m) for the B and D given to set_input; on the
-  /// diagonal route Σ_e (CV)_{:,e} (V⁻¹B)_{e,:} / (ξ − λ_e) without forming
-  /// K (O(n p m) per frequency, nothing allocated once G has its size).
-  /// Returns false when ξI − A is singular.
+  /// The B and D of response().
   void set_input(const Eigen::MatrixXd& B, const Eigen::MatrixXd& D) {
     B_ = B.cast<cplx>();
     D_ = D.cast<cplx>();
     if (diagonal_) VinvB_ = Vinv_ * B_;
   }
+  /// G = C (ξI − A)⁻¹ B + D (p × m) for the B and D given to set_input; on the
+  /// diagonal route Σ_e (CV)_{:,e} (V⁻¹B)_{e,:} / (ξ − λ_e) without forming
+  /// K (O(n p m) per frequency, nothing allocated once G has its size).
+  /// Returns false when ξI − A is singular.
   bool response(cplx xi, Eigen::MatrixXcd& G, Eigen::MatrixXcd& K) const {
     G = D_;
     if (A_.rows() == 0) return true;
-    if (!diagonal_) {
-      if (!left(xi, K)) return false;
-      G.noalias() += K * B_;
-      return G.allFinite();
-    }
-    const Eigen::Index p = CV_.rows(), n = CV_.cols(), m = VinvB_.cols();
-    cplx* g = G.data();  // column-major p × m
-    for (Eigen::Index e = 0; e < n; ++e) {
-      cplx de;
-      if (!modal_factor(xi, e, de)) return false;
-      for (Eigen::Index a = 0; a < p; ++a) {
-        const cplx ce = numerics::multiply(CV_(a, e), de);
-        for (Eigen::Index j = 0; j < m; ++j) g[a + p * j] += numerics::multiply(ce, VinvB_(e, j));
-      }
-    }
+    if (diagonal_) return add_modal_sum(xi, VinvB_, G);
+    if (!left(xi, K)) return false;
+    G.noalias() += K * B_;
     return G.allFinite();
   }
 
  private:
-  // 1/(ξ − λ_e) as conj/|·|², not std::complex's division (a libgcc call that
-  // guards against overflow: a tenth of `reproduce fig1`); |ξ − λ|²
-  // underflows only for |ξ − λ| < 1e-154, where ξI − A is singular anyway.
-  bool modal_factor(cplx xi, Eigen::Index e, cplx& de) const {
-    const double xr = xi.real() - lambda_(e).real(), xim = xi.imag() - lambda_(e).imag();
-    const double x2 = xr * xr + xim * xim;
-    de = cplx(xr / x2, -xim / x2);
-    return x2 > 0 && std::isfinite(de.real()) && std::isfinite(de.imag());
+  // out (p × W.cols(), column-major) += Σ_e (CV)_{:,e} W_{e,:} / (ξ − λ_e), W
+  // = V⁻¹ (left) or V⁻¹B (response). 1/(ξ − λ_e) as conj/|·|², not
+  // std::complex's division (a libgcc call that guards against overflow: a
+  // tenth of `reproduce fig1`); |ξ − λ|² underflows only for |ξ − λ| <
+  // 1e-154, where ξI − A is singular anyway. False when it is.
+  template <class W>
+  bool add_modal_sum(cplx xi, const W& w, Eigen::MatrixXcd& out) const {
+    const Eigen::Index p = CV_.rows(), n = CV_.cols(), cols = w.cols();
+    cplx* o = out.data();
+    for (Eigen::Index e = 0; e < n; ++e) {
+      const double xr = xi.real() - lambda_(e).real(), xim = xi.imag() - lambda_(e).imag();
+      const double x2 = xr * xr + xim * xim;
+      const cplx de(xr / x2, -xim / x2);
+      if (!(x2 > 0) || !std::isfinite(de.real()) || !std::isfinite(de.imag())) return false;
+      for (Eigen::Index a = 0; a < p; ++a) {
+        const cplx ce = numerics::multiply(CV_(a, e), de);
+        for (Eigen::Index j = 0; j < cols; ++j) o[a + p * j] += numerics::multiply(ce, w(e, j));
+      }
+    }
+    return out.allFinite();
   }
 
  private:
@@ -123,7 +113,7 @@ class Resolvent {
   bool diagonal_ = false;
   Eigen::VectorXcd lambda_;
   Eigen::MatrixXcd CV_;
-  Eigen::Matrix<cplx, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Vinv_;  // rows read in left()
+  Eigen::Matrix<cplx, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Vinv_;  // rows read by add_modal_sum
   Eigen::MatrixXcd B_, D_, VinvB_;  // set_input's
 };
 
