@@ -241,8 +241,12 @@ struct GapReport {
   int excited = 0, unexcited = 0;                  ///< lines in each test
   double p_gap = 1, p_nonlinearity = 1, p_leakage = 1;  ///< detection tests on the model as given
   /// Whether the periods after the first carry the same noise power
-  /// (period_power_test below, on lines 1 … P/2): the tests above assume
-  /// they do. p < effect_alpha adds a note. Relative power per period, the
+  /// (period_power_test below, on lines 1 … P/2): the tests above are
+  /// derived for equal power and stay valid, if conservative, without it (a
+  /// line's t is then Student's t under unequal variances; the reasoning and
+  /// the measurements at period_power in gap.cpp), except a static model's
+  /// transient test, a test of size. p < effect_alpha adds a note that says
+  /// so. Relative power per period, the
   /// first and any further periods a detected transient reaches left out
   /// (the leakage test's); empty (and p = 1) with < 3 periods left or < 30
   /// line pairs carrying noise (period_power_test).
