@@ -298,6 +298,8 @@ int run_gap_validate(const GapValidateCommand& given) {
       << ", share <= 2: " << rate(j["gap_after_correct"]["share_at_most_2"]) << "\n";
   out << "  noise power differs between periods (noted in the report): " << v.period_power_noted << " of " << v.cases
       << " cases, " << v.false_alarms_noted << " of the " << v.false_alarms << " false alarms\n";
+  out << "  adjacent periods' noise alike (noted in the report): " << v.periods_dependent_noted << " of " << v.cases
+      << " cases, " << v.false_alarms_dependent_noted << " of the " << v.false_alarms << " false alarms\n";
   out << "confusion (truth -> verdict: count):\n";
   for (const auto& t : v.confusion)
     for (const auto& p : t.second)

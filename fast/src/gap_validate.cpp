@@ -100,6 +100,8 @@ GapValidationCase run_case(const GapValidationOptions& o, int i, const std::file
     r.gap_after = rep.gap_after;
     r.p_period_power = rep.p_period_power;
     r.period_power_noted = rep.period_power_unequal();
+    r.p_period_independence = rep.p_period_independence;
+    r.periods_dependent_noted = rep.periods_dependent();
     const double Ts = meta.sample_time;
     for (const auto& tb : c.bands) {  // truth in cycles/sample, report in Hz
       bool hit = false;
@@ -173,10 +175,12 @@ GapValidation validate_gap(const GapValidationOptions& o) {
     ++c[1];
     v.correct_up_to_alternatives[r.category] += r.correct_up_to_alternatives;
     v.period_power_noted += r.period_power_noted;
+    v.periods_dependent_noted += r.periods_dependent_noted;
     if (r.category == "none") {
       ++none;
       alarms += r.verdict != "none";
       v.false_alarms_noted += r.verdict != "none" && r.period_power_noted;
+      v.false_alarms_dependent_noted += r.verdict != "none" && r.periods_dependent_noted;
     } else {
       bands += r.truth_bands;
       hits += r.bands_hit;
@@ -247,6 +251,8 @@ nlohmann::json gap_validation_to_json(const GapValidation& v) {
                    ? nlohmann::json{{"measured", false}}
                    : nlohmann::json{{"measured", true}, {"sources", v.noise_sources}, {"pool", v.noise_pool}};
   j["period_power_noted"] = {{"cases", v.period_power_noted}, {"false_alarms", v.false_alarms_noted}};
+  j["periods_dependent_noted"] = {{"cases", v.periods_dependent_noted},
+                                  {"false_alarms", v.false_alarms_dependent_noted}};
   const auto& g = v.gap_after_correct;
   auto q = [&](double p) { return g.empty() ? NAN : g[static_cast<size_t>(p * (g.size() - 1))]; };
   j["gap_after_correct"] = {{"n", g.size()},     {"median", q(0.5)}, {"p90", q(0.9)},
@@ -262,7 +268,7 @@ nlohmann::json gap_validation_to_json(const GapValidation& v) {
                           {"truth", r.truth},         {"verdict", r.verdict},     {"correct", r.correct},
                           {"gap_before", r.gap_before}, {"gap_after", r.gap_after}, {"truth_bands", r.truth_bands},
                           {"bands_hit", r.bands_hit}, {"correct_up_to_alternatives", r.correct_up_to_alternatives},
-                          {"p_period_power", r.p_period_power}};
+                          {"p_period_power", r.p_period_power}, {"p_period_independence", r.p_period_independence}};
     if (!r.error.empty()) row["error"] = r.error;
     j["rows"].push_back(row);
   }

@@ -63,6 +63,10 @@ struct GapValidationCase {
   /// and whether it was noted (p < effect_alpha).
   double p_period_power = 1;
   bool period_power_noted = false;
+  /// The report's independent-periods test (GapReport::p_period_independence)
+  /// and whether it was noted.
+  double p_period_independence = 1;
+  bool periods_dependent_noted = false;
   std::string error;      ///< the diagnosis refused the case (counted as wrong)
 };
 
@@ -78,6 +82,8 @@ struct GapValidation {
   /// Cases whose report notes that the noise power differs between periods,
   /// and how many of the false alarms carry that note.
   int period_power_noted = 0, false_alarms_noted = 0;
+  /// The same for the note that adjacent periods' noise is alike.
+  int periods_dependent_noted = 0, false_alarms_dependent_noted = 0;
   std::vector<double> gap_after_correct;  ///< sorted, correct verdicts with effects
   std::vector<GapValidationCase> rows;
   std::vector<std::string> noise_sources;  ///< measured noise's records (empty: synthetic noise)
