@@ -877,7 +877,7 @@ TEST(GapDiagnosis, UnequalNoisePowerLeavesTheTestsValid) {
     if (r.period_power_unequal()) {
       ++noted;
       const bool says = std::any_of(r.notes.begin(), r.notes.end(), [](const std::string& n) {
-        return n.find("stay valid, if anything conservative") != std::string::npos &&
+        return n.find("leaves the gap, band and effect tests valid, if anything conservative") != std::string::npos &&
                n.find("compares the shape") != std::string::npos;
       });
       EXPECT_TRUE(says) << "record " << i;

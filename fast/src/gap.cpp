@@ -1254,10 +1254,10 @@ void period_power(const Spectra& s, const Augment& a0, int first, bool static_mo
                         std::to_string(s.M) + " of the " + std::to_string(s.M) + " analysed (relative power " +
                         fmt(*lo, 3) + " to " + fmt(*hi, 3) + ", p " +
                         (pp.p < 1e-300 ? std::string("< 1e-300") : sci(pp.p, 2)) +
-                        "): the noise is not stationary. The gap, band and effect tests stay valid, if anything "
-                        "conservative (each line's t is Student's t under unequal variances: the loudest period "
-                        "raises the mean and the variance together), so a gap or effect near its threshold may be "
-                        "missed, not invented; " +
+                        "): the noise is not stationary. Unequal power by itself leaves the gap, band and effect "
+                        "tests valid, if anything conservative (each line's t is Student's t under unequal "
+                        "variances: the loudest period raises the mean and the variance together), so a gap or "
+                        "effect near its threshold may be missed, not invented; " +
                         (static_model ? std::string("the transient test of this static model compares the periods' "
                                                     "deviation sizes, so its leakage p-value comes out too small")
                                       : std::string("the transient test compares the shape of a period's deviation, "
