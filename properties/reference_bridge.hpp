@@ -57,9 +57,9 @@ inline reference::FrfData to_reference(const FrfData& d) {
   r.domain = d.domain == Domain::Discrete ? "discrete" : "continuous";
   for (int k = 0; k < d.frequencies(); ++k) {
     r.omega.push_back(reference::Real(d.omega(k)));
-    r.U.push_back(to_reference(d.U[k]));
-    r.Y.push_back(to_reference(d.Y[k]));
-    r.variance.push_back(to_reference(d.variance[k]));
+    r.U.push_back(to_reference(Eigen::MatrixXcd(d.U[k])));
+    r.Y.push_back(to_reference(Eigen::MatrixXcd(d.Y[k])));
+    r.variance.push_back(to_reference(Eigen::MatrixXd(d.variance[k])));
   }
   return r;
 }

@@ -866,6 +866,23 @@ TEST(FrfErrors, BadInputsThrowTheRightKind) {
     expect_error(ErrorKind::Grid, [&] { identify_frf_fixed(d, 4, 8); }, "continuous omega < 0");
   }
   {
+    // Matrices of another shape at one frequency: refused where they enter
+    // (one contiguous stack per field), and a variance stack of another shape
+    // than Y by validate.
+    std::vector<Eigen::MatrixXcd> G(40, Eigen::MatrixXcd::Ones(1, 1));
+    G[17] = Eigen::MatrixXcd::Ones(2, 1);
+    expect_error(ErrorKind::Input, [&] { frf_data(Domain::Discrete, w, G); }, "G of another shape");
+    try {
+      frf_data(Domain::Discrete, w, G);
+    } catch (const Error& e) {
+      EXPECT_EQ(e.where(), "frequency 18");
+    }
+    FrfData d = good;
+    d.variance.resize(40, 2, 1);
+    for (int k = 0; k < 40; ++k) d.variance[k].setOnes();
+    expect_error(ErrorKind::Input, [&] { identify_frf_fixed(d, 4, 8); }, "variance of another shape than Y");
+  }
+  {
     FrfData d = noise_free_frf(sys, random_grid(rng, 7, 0.1, 3.0));  // 2Fc = 14 < r(m+p) = 16
     expect_error(ErrorKind::Dimension, [&] { identify_frf_fixed(d, 4, 8); }, "too few frequencies for r");
   }

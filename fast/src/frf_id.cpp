@@ -357,11 +357,10 @@ Eigen::MatrixXd step1ab_qr(const FrfData& d, const Bases& b, int r) {
   const int nu = r * m, ny = r * p, cols = nu + ny;
   // Group k's rows 2j, 2j + 1: Re and Im of column j; in column (i, a):
   // W_i(ξ_k) U_k(a, j) (input block) or W_i(ξ_k) Y_k(a, j) (output block).
-  const auto column = [&](const std::vector<Eigen::MatrixXcd>& X, const Eigen::VectorXcd& w, int a, int g0,
-                          double* out) {
+  const auto column = [&](const ComplexMatrixStack& X, const Eigen::VectorXcd& w, int a, int g0, double* out) {
     for (Eigen::Index k = 0; k < w.size(); ++k)
       for (int j = 0; j < c; ++j, out += 2) {
-        const cplx v = w(k) * X[g0 + k](a, j);
+        const cplx v = w(k) * X(g0 + k, a, j);
         out[0] = v.real();
         out[1] = v.imag();
       }
@@ -494,10 +493,10 @@ void step3(const FrfData& d, const Bases& b, const Eigen::MatrixXd& A, const Eig
     int row = 0;
     for (int j = 0; j < c; ++j)
       for (int a = 0; a < p; ++a, row += 2) {
-        const double wgt = 1.0 / std::sqrt(d.variance[k](a, j));
+        const double wgt = 1.0 / std::sqrt(d.variance(k, a, j));
         // Coefficient of B(e, f) (column-major index e + n f): K(a, e) U(f, j).
         for (int f = 0; f < m; ++f) {
-          const cplx u = d.U[k](f, j);
+          const cplx u = d.U(k, f, j);
           for (int e = 0; e < n; ++e) {
             const cplx v = wgt * numerics::multiply(K(a, e), u);
             rows(row, e + n * f) = v.real();
@@ -508,7 +507,7 @@ void step3(const FrfData& d, const Bases& b, const Eigen::MatrixXd& A, const Eig
           rows(row, nb + a + p * f) = v.real();
           rows(row + 1, nb + a + p * f) = v.imag();
         }
-        const cplx y = wgt * d.Y[k](a, j);
+        const cplx y = wgt * d.Y(k, a, j);
         rows(row, cols - 1) = y.real();
         rows(row + 1, cols - 1) = y.imag();
       }
@@ -580,18 +579,23 @@ double default_discrete_scale(const Eigen::VectorXd& omega) {
   return 2 * std::atan(std::sqrt(std::tan(lo / 2) * std::tan(hi / 2)));
 }
 
-FrfData frf_data(Domain domain, const Eigen::VectorXd& omega, std::vector<Eigen::MatrixXcd> G,
-                 std::vector<Eigen::MatrixXd> variance) {
+FrfData frf_data(Domain domain, const Eigen::VectorXd& omega, const std::vector<Eigen::MatrixXcd>& G,
+                 const std::vector<Eigen::MatrixXd>& variance) {
+  return frf_data(domain, omega, ComplexMatrixStack(G), RealMatrixStack(variance));
+}
+
+FrfData frf_data(Domain domain, const Eigen::VectorXd& omega, ComplexMatrixStack G, RealMatrixStack variance) {
   FrfData d;
   d.domain = domain;
   d.omega = omega;
   d.has_noise_model = !variance.empty();
-  d.U.resize(G.size());
+  const Eigen::Index F = G.size(), p = G.rows(), m = G.cols();
   if (variance.empty()) {
-    variance.resize(G.size());
-    for (size_t k = 0; k < G.size(); ++k) variance[k] = Eigen::MatrixXd::Ones(G[k].rows(), G[k].cols());
+    variance.resize(F, p, m);
+    for (Eigen::Index k = 0; k < F; ++k) variance[k].setOnes();
   }
-  for (size_t k = 0; k < G.size(); ++k) d.U[k] = Eigen::MatrixXcd::Identity(G[k].cols(), G[k].cols());
+  d.U.resize(F, m, m);
+  for (Eigen::Index k = 0; k < F; ++k) d.U[k].setIdentity();
   d.Y = std::move(G);
   d.variance = std::move(variance);
   return d;
@@ -605,6 +609,8 @@ void validate(const FrfData& d, const std::string& where) {
     fail(ErrorKind::Input, where, "U, Y and variance must have one entry per frequency (" + std::to_string(F) + ")");
   const int m = d.inputs(), p = d.outputs(), c = d.columns();
   if (m < 1 || p < 1 || c < 1) fail(ErrorKind::Input, where, "needs at least one input, output and column");
+  if (d.Y.cols() != c || d.variance.rows() != p || d.variance.cols() != c)
+    fail(ErrorKind::Input, where, "inconsistent shapes of U (m x c), Y and variance (p x c)");
   if (d.domain == Domain::Discrete && (!(d.sample_time > 0) || !std::isfinite(d.sample_time)))
     fail(ErrorKind::Input, where, "sample time must be positive and finite, got " + fmt(d.sample_time, 6));
   bool increasing = true;  // the usual grid: no sort needed for the repeat check
@@ -617,14 +623,11 @@ void validate(const FrfData& d, const std::string& where) {
     if (d.domain == Domain::Continuous && !(w > 0))
       fail(ErrorKind::Grid, at_k(), "omega = " + fmt(w, 6) + " rad/s must be positive for continuous time");
     if (k > 0 && !(w > d.omega(k - 1))) increasing = false;
-    if (d.U[k].rows() != m || d.U[k].cols() != c || d.Y[k].rows() != p || d.Y[k].cols() != c ||
-        d.variance[k].rows() != p || d.variance[k].cols() != c)
-      fail(ErrorKind::Input, at_k(), "inconsistent shapes of U, Y or variance");
     if (!d.U[k].allFinite()) fail(ErrorKind::Input, at_k(), "input is NaN or Inf");
     if (!d.Y[k].allFinite()) fail(ErrorKind::Input, at_k(), "output (FRF) is NaN or Inf");
     for (int a = 0; a < p; ++a)
       for (int j = 0; j < c; ++j) {
-        const double v = d.variance[k](a, j);
+        const double v = d.variance(k, a, j);
         if (!(v > 0) || !std::isfinite(v))
           fail(ErrorKind::Input, at_k(), "variance " + fmt(v, 6) + " must be positive and finite");
       }
@@ -911,11 +914,11 @@ std::vector<FrfResult> identify_frf_fixed(const std::vector<FrfData>& data, int 
   for (size_t v = 0; v < data.size(); ++v) {
     const FrfData& d = data[v];
     validate(d, "noise model " + std::to_string(v + 1));
-    bool same = d.domain == d0.domain && d.sample_time == d0.sample_time && d.omega.size() == d0.omega.size() &&
-                d.omega == d0.omega && d.U.size() == d0.U.size() && d.Y.size() == d0.Y.size();
-    for (size_t k = 0; same && k < d.U.size(); ++k)
-      same = d.U[k].rows() == d0.U[k].rows() && d.U[k].cols() == d0.U[k].cols() && d.U[k] == d0.U[k] &&
-             d.Y[k].rows() == d0.Y[k].rows() && d.Y[k].cols() == d0.Y[k].cols() && d.Y[k] == d0.Y[k];
+    const auto same_stack = [](const ComplexMatrixStack& a, const ComplexMatrixStack& b) {
+      return a.size() == b.size() && a.rows() == b.rows() && a.cols() == b.cols() && a.entries() == b.entries();
+    };
+    const bool same = d.domain == d0.domain && d.sample_time == d0.sample_time && d.omega.size() == d0.omega.size() &&
+                      d.omega == d0.omega && same_stack(d.U, d0.U) && same_stack(d.Y, d0.Y);
     if (!same)
       fail(ErrorKind::Input, "noise model " + std::to_string(v + 1),
            "differs from noise model 1 in more than the variances (U, Y, omega, domain or sample time)");
@@ -1088,9 +1091,19 @@ SampleStatistics sample_statistics(Domain domain, const Eigen::VectorXd& omega,
   FrfData& d = st.data;
   d.domain = domain;
   d.omega = omega;
-  d.U.resize(F);
-  d.Y.resize(F);
-  d.variance.resize(F);
+  const Eigen::Index m = F > 0 && !U_l[0].empty() ? U_l[0][0].size() : 0;
+  const Eigen::Index p = F > 0 && !Y_l[0].empty() ? Y_l[0][0].size() : 0;
+  for (int l = 0; l < M; ++l) {
+    if (static_cast<int>(U_l[l].size()) != F || static_cast<int>(Y_l[l].size()) != F)
+      fail(ErrorKind::Input, "period " + std::to_string(l + 1), "needs one input and one output vector per frequency");
+    for (int k = 0; k < F; ++k)
+      if (U_l[l][k].size() != m || Y_l[l][k].size() != p)
+        fail(ErrorKind::Input, "period " + std::to_string(l + 1) + " frequency " + std::to_string(k + 1),
+             "inconsistent numbers of inputs or outputs");
+  }
+  d.U.resize(F, m, 1);
+  d.Y.resize(F, p, 1);
+  d.variance.resize(F, p, 1);
   st.var_U.resize(F);
   st.cov_YU.resize(F);
   // Work vectors sized once (a Monte Carlo run calls this per run: per-line

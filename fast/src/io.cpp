@@ -440,16 +440,16 @@ FrfData parse_frf(std::istream& in, const std::string& name, Domain domain, cons
       (has_var && header[3] != "G_var"))
     input_error(name + " line 1", "header must be omega,G_re,G_im or omega,G_re,G_im,G_var");
   std::vector<double> omega;
-  std::vector<Eigen::MatrixXcd> G;
-  std::vector<Eigen::MatrixXd> var;
+  ComplexMatrixStack G;
+  RealMatrixStack var;
   // The file line of every row, for a repeated frequency, checked after the
   // rows (a map of omega -> line text held ~100 bytes per row: 10⁶ lines, a
   // third of identify-frf's peak memory).
   std::vector<int> lines;
   try {  // a hint only (blank lines count too): without it the vectors grow as before
     omega.reserve(expected_rows);
-    G.reserve(expected_rows);
-    if (has_var) var.reserve(expected_rows);
+    G.reserve(static_cast<Eigen::Index>(expected_rows), 1, 1);
+    if (has_var) var.reserve(static_cast<Eigen::Index>(expected_rows), 1, 1);
     lines.reserve(expected_rows);
   } catch (const std::bad_alloc&) {
   }
@@ -472,12 +472,12 @@ FrfData parse_frf(std::istream& in, const std::string& name, Domain domain, cons
                                                " must be positive for continuous time");
     lines.push_back(line);
     omega.push_back(w);
-    G.push_back(Eigen::MatrixXcd::Constant(
-        1, 1, cplx(parse_cell(cells[1], where + " column G_re"), parse_cell(cells[2], where + " column G_im"))));
+    G.push_back(Eigen::Matrix<cplx, 1, 1>(
+        cplx(parse_cell(cells[1], where + " column G_re"), parse_cell(cells[2], where + " column G_im"))));
     if (has_var) {
       const double v = parse_cell(cells[3], where + " column G_var");
       if (!(v > 0)) input_error(where + " column G_var", "variance " + cells[3] + " must be positive");
-      var.push_back(Eigen::MatrixXd::Constant(1, 1, v));
+      var.push_back(Eigen::Matrix<double, 1, 1>(v));
     }
   });
   if (omega.empty()) input_error(name, "no data rows");

@@ -19,20 +19,20 @@ FrfData frf_from_records(const SampleStatistics& stats) {
                     " outputs; an FRF file holds one input and one output (choose them with --input and --output)");
   if (stats.M < 2) throw Error(ErrorKind::Input, "records", "need M >= 2 periods for a sample variance");
   const int F = d.frequencies();
-  std::vector<Eigen::MatrixXcd> G(F, Eigen::MatrixXcd(1, 1));
-  std::vector<Eigen::MatrixXd> var(F, Eigen::MatrixXd(1, 1));
+  ComplexMatrixStack G(F, 1, 1);
+  RealMatrixStack var(F, 1, 1);
   for (int k = 0; k < F; ++k) {
     const cplx U = d.U[k](0, 0), g = d.Y[k](0, 0) / U;
-    G[k](0, 0) = g;
+    G(k, 0, 0) = g;
     // data.variance is σ̂²_Y / M; var_U and cov_YU are not divided by M. The
     // bracket is the sample variance of Y_l − Ĝ U_l over the periods, ≥ 0
     // but for rounding (clipped: a zero, identical periods, is refused by
     // frf_data as a variance that is not positive).
     const double var_e = d.variance[k](0, 0) +
                          (std::norm(g) * stats.var_U[k](0) - 2 * std::real(std::conj(g) * stats.cov_YU[k](0, 0))) / stats.M;
-    var[k](0, 0) = std::max(var_e, 0.0) / std::norm(U);
+    var(k, 0, 0) = std::max(var_e, 0.0) / std::norm(U);
   }
-  return frf_data(d.domain, d.omega, G, var);
+  return frf_data(d.domain, d.omega, std::move(G), std::move(var));
 }
 
 std::string frf_csv(const FrfData& data) {

@@ -223,7 +223,7 @@ struct Layout {
     std::vector<Eigen::MatrixXcd> XU(modes), W(modes);
     for (int k = 0; k < d.frequencies(); ++k) {
       const cplx xi = domain == Domain::Discrete ? std::polar(1.0, d.omega(k)) : cplx(0.0, d.omega(k) / scale);
-      const Eigen::MatrixXcd& U = d.U[k];
+      const auto U = d.U[k];
       Eigen::MatrixXcd G(p, m);
       for (int l = 0; l < m; ++l)
         for (int o = 0; o < p; ++o) G(o, l) = th[d_offset + l * p + o];
@@ -253,7 +253,7 @@ struct Layout {
       for (int j = 0; j < c; ++j)
         for (int o = 0; o < p; ++o) {
           const size_t row = 2 * ((static_cast<size_t>(k) * c + j) * p + o);
-          const double w = 1 / std::sqrt(d.variance[k](o, j));
+          const double w = 1 / std::sqrt(d.variance(k, o, j));
           r[row] = E(o, j).real() * w;
           r[row + 1] = E(o, j).imag() * w;
           if (!std::isfinite(r[row]) || !std::isfinite(r[row + 1])) return false;
@@ -262,7 +262,7 @@ struct Layout {
       // column t of the Jacobian at frequency k from dGU (p × c): −dGU/σ
       auto put = [&](int t, int o, int j, cplx v) {
         const size_t row = 2 * ((static_cast<size_t>(k) * c + j) * p + o);
-        const double w = 1 / std::sqrt(d.variance[k](o, j));
+        const double w = 1 / std::sqrt(d.variance(k, o, j));
         J[row * count + t] = -v.real() * w;
         J[(row + 1) * count + t] = -v.imag() * w;
       };

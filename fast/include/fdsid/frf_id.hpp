@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 
+#include "fdsid/matrix_stack.hpp"
 #include "fdsid/model.hpp"
 
 namespace fdsid {
@@ -24,26 +25,28 @@ struct FrfData {
   /// model has sample_time 0 (no sample period), whatever this says.
   double sample_time = 1.0;
   Eigen::VectorXd omega;                ///< F distinct frequencies
-  std::vector<Eigen::MatrixXcd> U;      ///< F matrices m × c
-  std::vector<Eigen::MatrixXcd> Y;      ///< F matrices p × c
-  std::vector<Eigen::MatrixXd> variance;///< F matrices p × c: σ²_Y of each entry of Y, > 0
+  ComplexMatrixStack U;      ///< F matrices m × c
+  ComplexMatrixStack Y;      ///< F matrices p × c
+  RealMatrixStack variance;  ///< F matrices p × c: σ²_Y of each entry of Y, > 0
   /// Whether `variance` is a noise model (known or sample variance) rather than
   /// a placeholder weight of 1 (FRF files without a G_var column). Only the
   /// automatic order selection reads it.
   bool has_noise_model = true;
 
   int frequencies() const { return static_cast<int>(omega.size()); }
-  int inputs() const { return U.empty() ? 0 : static_cast<int>(U[0].rows()); }
-  int outputs() const { return Y.empty() ? 0 : static_cast<int>(Y[0].rows()); }
-  int columns() const { return U.empty() ? 0 : static_cast<int>(U[0].cols()); }
+  int inputs() const { return U.empty() ? 0 : static_cast<int>(U.rows()); }
+  int outputs() const { return Y.empty() ? 0 : static_cast<int>(Y.rows()); }
+  int columns() const { return U.empty() ? 0 : static_cast<int>(U.cols()); }
 };
 
 /// FRF data G(ξ_k) (p × m each) with the variance of each entry: U[k] = I_m.
 /// An empty `variance` means unit weights (has_noise_model = false).
-/// G and variance are taken by value: pass them with std::move where they are
-/// not needed after (a file of 10⁶ lines held them twice).
-FrfData frf_data(Domain domain, const Eigen::VectorXd& omega, std::vector<Eigen::MatrixXcd> G,
-                 std::vector<Eigen::MatrixXd> variance = {});
+/// The matrices must share one shape (Error(Input) naming the first that does not).
+FrfData frf_data(Domain domain, const Eigen::VectorXd& omega, const std::vector<Eigen::MatrixXcd>& G,
+                 const std::vector<Eigen::MatrixXd>& variance = {});
+/// The same from stacks, taken by value: pass them with std::move where they
+/// are not needed after (a file reader fills them directly).
+FrfData frf_data(Domain domain, const Eigen::VectorXd& omega, ComplexMatrixStack G, RealMatrixStack variance = {});
 
 /// Checks shapes, finiteness, positive variances, distinct frequencies in range
 /// (discrete: 0 ≤ ω ≤ π; continuous: ω > 0). Throws Error(Input) or Error(Grid)
