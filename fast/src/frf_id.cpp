@@ -1104,37 +1104,32 @@ SampleStatistics sample_statistics(Domain domain, const Eigen::VectorXd& omega,
   d.U.resize(F, m, 1);
   d.Y.resize(F, p, 1);
   d.variance.resize(F, p, 1);
-  st.var_U.resize(F);
-  st.cov_YU.resize(F);
-  // Work vectors sized once (a Monte Carlo run calls this per run: per-line
-  // temporaries were a sixth of `reproduce fig1`).
-  Eigen::VectorXcd mu, my, dy, du;
-  Eigen::VectorXd vy, vu;
-  Eigen::MatrixXcd cyu;
+  st.var_U.resize(F, m, 1);
+  st.cov_YU.resize(F, p, m);
+  // Entry by entry into the stacks: no temporaries (a Monte Carlo run calls
+  // this per run; dynamic-size vector arithmetic per line was a tenth of
+  // `reproduce fig1`).
   for (int k = 0; k < F; ++k) {
-    mu.setZero(U_l[0][k].size());
-    my.setZero(Y_l[0][k].size());
-    for (int l = 0; l < M; ++l) {
-      mu += U_l[l][k];
-      my += Y_l[l][k];
+    for (int l = 0; l < M; ++l) {  // Eq. (25): Û, Ŷ
+      for (int a = 0; a < m; ++a) d.U(k, a, 0) += U_l[l][k](a);
+      for (int a = 0; a < p; ++a) d.Y(k, a, 0) += Y_l[l][k](a);
     }
-    mu /= M;
-    my /= M;
-    vy.setZero(my.size());
-    vu.setZero(mu.size());
-    cyu.setZero(my.size(), mu.size());
-    for (int l = 0; l < M; ++l) {
-      dy = Y_l[l][k] - my;
-      du = U_l[l][k] - mu;
-      vy += dy.cwiseAbs2();
-      vu += du.cwiseAbs2();
-      cyu.noalias() += dy * du.adjoint();  // Eq. (32): (Y − Ŷ) conj(U − Û)
+    for (int a = 0; a < m; ++a) d.U(k, a, 0) /= M;
+    for (int a = 0; a < p; ++a) d.Y(k, a, 0) /= M;
+    for (int l = 0; l < M; ++l)
+      for (int a = 0; a < p; ++a) {
+        const cplx dy = Y_l[l][k](a) - d.Y(k, a, 0);
+        d.variance(k, a, 0) += std::norm(dy);
+        for (int b = 0; b < m; ++b)  // Eq. (32): (Y − Ŷ) conj(U − Û)
+          st.cov_YU(k, a, b) += dy * std::conj(U_l[l][k](b) - d.U(k, b, 0));
+      }
+    for (int l = 0; l < M; ++l)
+      for (int b = 0; b < m; ++b) st.var_U(k, b, 0) += std::norm(U_l[l][k](b) - d.U(k, b, 0));
+    for (int a = 0; a < p; ++a) {
+      d.variance(k, a, 0) /= double(M - 1) * M;  // σ̂²_Y / M, Section 4.1
+      for (int b = 0; b < m; ++b) st.cov_YU(k, a, b) /= double(M - 1);
     }
-    d.U[k] = mu;
-    d.Y[k] = my;
-    d.variance[k] = vy / (double(M - 1) * M);  // σ̂²_Y / M, Section 4.1
-    st.var_U[k] = vu / double(M - 1);
-    st.cov_YU[k] = cyu / double(M - 1);
+    for (int b = 0; b < m; ++b) st.var_U(k, b, 0) /= double(M - 1);
   }
   return st;
 }

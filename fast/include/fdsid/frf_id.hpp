@@ -261,8 +261,8 @@ std::vector<std::vector<Eigen::VectorXcd>> period_spectra(const Eigen::MatrixXd&
 /// 4.1: the sample-subspace algorithm replaces Y, σ²_Y by Ŷ, σ̂²_Y/M).
 struct SampleStatistics {
   FrfData data;
-  std::vector<Eigen::VectorXd> var_U;   ///< σ̂²_U per line k (var_U[k]: one entry per input; 1/(M−1) form, not divided by M)
-  std::vector<Eigen::MatrixXcd> cov_YU; ///< σ̂_YU(k) of Eq. (32), p × m, not divided by M
+  RealMatrixStack var_U;      ///< σ̂²_U per line k (var_U[k]: m × 1, one entry per input; 1/(M−1) form, not divided by M)
+  ComplexMatrixStack cov_YU;  ///< σ̂_YU(k) of Eq. (32), p × m, not divided by M
   int M = 0;
 };
 /// U_l[l][k] ∈ C^m, Y_l[l][k] ∈ C^p. Throws Error(Input) for M < 2.
