@@ -1827,6 +1827,15 @@ void conclude(const Spectra& s, const LineStats& st0, const Augment& cur, const 
   rep.t_after = rep.present.empty() ? st0.t : st1.t;
 }
 
+// The R deviations from their mean of a set of R period residuals.
+Eigen::VectorXcd deviations(const Eigen::VectorXcd& e) { return e.array() - e.mean(); }
+
+// Line pair j's period deviations: of the difference of lines 2j and 2j + 1,
+// in which the leakage term (smooth across adjacent lines) cancels.
+Eigen::VectorXcd pair_deviations(const Eigen::MatrixXcd& residuals, Eigen::Index j) {
+  return deviations(residuals.col(2 * j) - residuals.col(2 * j + 1));
+}
+
 }  // namespace
 
 PeriodPowerTest period_power_test(const Eigen::MatrixXcd& residuals) {
@@ -1837,8 +1846,7 @@ PeriodPowerTest period_power_test(const Eigen::MatrixXcd& residuals) {
   double v = 0;
   Eigen::Index used = 0;
   for (Eigen::Index j = 0; j < J; ++j) {
-    const Eigen::VectorXcd e = residuals.col(2 * j) - residuals.col(2 * j + 1);  // the leakage term cancels
-    const Eigen::VectorXcd d = e.array() - e.mean();
+    const Eigen::VectorXcd d = pair_deviations(residuals, j);
     const double total = d.squaredNorm();
     if (!(total > 0)) continue;  // a pair without noise (exactly periodic) says nothing
     const Eigen::VectorXd q = d.cwiseAbs2() / total;
@@ -1868,9 +1876,8 @@ PeriodIndependenceTest period_independence_test(const Eigen::MatrixXcd& residual
   const Eigen::Index R = residuals.rows(), J = residuals.cols() / 2;
   PeriodIndependenceTest out;
   if (R < 4 || J < 30) return out;
-  // c of one set of R residuals (deviations taken here).
-  const auto lag_correlation = [R](const Eigen::VectorXcd& e) {
-    const Eigen::VectorXcd d = e.array() - e.mean();
+  // c of one set of R period deviations d.
+  const auto lag_correlation = [R](const Eigen::VectorXcd& d) {
     const double total = d.squaredNorm();
     double c = 0;
     for (Eigen::Index m = 0; m < R; ++m) c += (d(m) * std::conj(d((m + 1) % R))).real();
@@ -1879,7 +1886,7 @@ PeriodIndependenceTest period_independence_test(const Eigen::MatrixXcd& residual
   double sum = 0, sum2 = 0;
   Eigen::Index used = 0;
   for (Eigen::Index j = 0; j < J; ++j) {
-    const std::optional<double> c = lag_correlation(residuals.col(2 * j) - residuals.col(2 * j + 1));
+    const std::optional<double> c = lag_correlation(pair_deviations(residuals, j));
     if (!c) continue;  // a pair without noise says nothing
     sum += *c;
     sum2 += *c * *c;
@@ -1903,7 +1910,7 @@ PeriodIndependenceTest period_independence_test(const Eigen::MatrixXcd& residual
   Eigen::VectorXcd e(R);
   for (int b = 0; b < kIndependenceDraws; ++b) {
     for (Eigen::Index m = 0; m < R; ++m) e(m) = sd(m) * cplx(normal(rng), normal(rng));
-    const double c = lag_correlation(e).value_or(-1 / (Rd - 1));
+    const double c = lag_correlation(deviations(e)).value_or(-1 / (Rd - 1));
     msum += c;
     msum2 += c * c;
   }
