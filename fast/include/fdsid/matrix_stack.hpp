@@ -5,6 +5,8 @@
 /// held 168 MiB where its numbers are 40 MB) and a malloc/free per frequency
 /// and per Monte Carlo run; here matrix k is entries [k·rows·cols, (k+1)·rows·cols)
 /// of one array, column-major like Eigen's, viewed through an Eigen::Map.
+#include <complex>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -59,7 +61,8 @@ class MatrixStack {
     data_.clear();
   }
   /// Appends x; the first matrix fixes the shape, a later one of another shape
-  /// is refused (Error(Input) naming it: the stack would be misread).
+  /// is refused (Error(Input) naming it: the stack would be misread). x must
+  /// not view this stack (growing it may move the block).
   template <class Derived>
   void push_back(const Eigen::MatrixBase<Derived>& x) {
     if (count_ == 0) {
