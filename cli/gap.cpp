@@ -8,6 +8,7 @@
 #include "common.hpp"
 #include "fdsid/error.hpp"
 #include "fdsid/figures.hpp"
+#include "fdsid/format.hpp"
 #include "fdsid/io.hpp"
 #include "fdsid/json.hpp"
 
@@ -77,10 +78,6 @@ void read_noise_pool(GapValidateCommand& c) {
 }
 
 std::string band_text(const std::array<double, 2>& b) { return "[" + sci(b[0], 4) + ", " + sci(b[1], 4) + "]"; }
-
-// A p-value below the smallest normal double (it underflowed) is "< 1e-300",
-// not 0 (review finding 21).
-std::string p_text(double p, int digits = 3) { return p < 1e-300 ? std::string("< 1e-300") : sci(p, digits); }
 
 // An effect parameter: flags and counts (series, at_input, order) as
 // integers, the rest in scientific notation (they printed as 2.0000e+00).

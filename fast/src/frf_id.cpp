@@ -108,7 +108,6 @@ class Resolvent {
     return out.allFinite();
   }
 
- private:
   Eigen::MatrixXd A_, C_;
   bool diagonal_ = false;
   Eigen::VectorXcd lambda_;

@@ -1243,7 +1243,7 @@ void period_power(const Spectra& s, const Augment& a0, int first, bool static_mo
     rep.notes.push_back(
         "adjacent periods' noise is alike (mean lag-1 correlation of their deviations from the mean period " +
         fmt(pi.correlation, 3) + ", " + fmt(pi.expected, 3) + " for independent periods, p " +
-        (pi.p < 1e-300 ? std::string("< 1e-300") : sci(pi.p, 2)) +
+        p_text(pi.p, 2) +
         "): something varies slowly from period to period that is neither periodic nor independent noise (a "
         "disturbance drifting in phase, a non-periodic response), so the periods' scatter underestimates the noise "
         "of their mean and the p-values here come out too small — a gap, band or effect near its threshold may be "
@@ -1253,7 +1253,7 @@ void period_power(const Spectra& s, const Augment& a0, int first, bool static_mo
     rep.notes.push_back("the noise power differs between periods " + std::to_string(first + 1) + "-" +
                         std::to_string(s.M) + " of the " + std::to_string(s.M) + " analysed (relative power " +
                         fmt(*lo, 3) + " to " + fmt(*hi, 3) + ", p " +
-                        (pp.p < 1e-300 ? std::string("< 1e-300") : sci(pp.p, 2)) +
+                        p_text(pp.p, 2) +
                         "): the noise is not stationary. Unequal power by itself leaves the gap, band and effect "
                         "tests valid, if anything conservative (each line's t is Student's t under unequal "
                         "variances: the loudest period raises the mean and the variance together), so a gap or "

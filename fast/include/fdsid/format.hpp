@@ -15,6 +15,10 @@ std::string fmt(double x, int digits);
 /// printf("%.*e", digits, x) prints it (e.g. sci(1234.56, 3) == "1.235e+03").
 std::string sci(double x, int digits = 3);
 
+/// A p-value as sci(p, digits), or "< 1e-300" below the smallest normal
+/// double (it underflowed; review finding 21: not 0).
+std::string p_text(double p, int digits = 3);
+
 /// The precision verdict of an estimate whose first-order relative error
 /// estimate is `estimate` (u × a condition number; review finding 38: a
 /// warning must say whether the model is usable). "" when estimate ≤ 1e-6

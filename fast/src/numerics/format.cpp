@@ -19,6 +19,8 @@ std::string sci(double x, int digits) {
   return buf;
 }
 
+std::string p_text(double p, int digits) { return p < 1e-300 ? std::string("< 1e-300") : sci(p, digits); }
+
 std::string precision_warning(double estimate, const std::string& what, const std::string& details) {
   if (estimate <= 1e-6) return "";
   if (usable_precision(estimate)) {
