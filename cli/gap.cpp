@@ -270,7 +270,8 @@ int run_gap_validate(const GapValidateCommand& given) {
   o.progress = progress("gap-validate: cases");
   const GapValidation v = validate_gap(o);
   const nlohmann::json j = to_json(v);
-  out << "gap-validate: " << v.cases << " blind cases (" << fdsid::to_string(o.family) << " family, P = " << o.period
+  out << "gap-validate: " << v.cases << " blind cases (" << fdsid::to_string(o.family) << " family"
+      << (o.continuous ? ", continuous-time" : "") << ", P = " << o.period
       << ", M = " << o.periods << ", seed " << o.seed
       << (o.measured_noise ? ", measured noise: " + std::to_string(o.measured_noise->periods.size()) + " noise periods from " +
                                  std::to_string(o.measured_noise->sources.size()) + " record(s)"
@@ -371,6 +372,9 @@ void register_gap_validate(CLI::App& app, Action& chosen) {
                                                           {"structure", GapFamily::Structure},
                                                           {"mixed", GapFamily::Mixed}},
                          "is not a family (classic, structure, mixed)"));
+  gval->add_flag("--continuous", o.continuous,
+                 "continuous-time simulation models and true systems (the same draws; nonlinear stages on an 8x finer "
+                 "grid, the record ideally sampled)");
   gval->add_option("--threads", o.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
   gval->add_option("--workdir", o.workdir, "write the cases' files here (default: a temporary directory)");
   gval->add_flag("--keep-files", o.keep_files, "keep each case's model.json, data.csv, meta.json and truth.json (the withheld effects, written beside them; the diagnosis reads the first three only)");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <set>
@@ -91,15 +92,52 @@ struct Section {
   }
 };
 
-/// Discrete pole of a continuous-like resonance: exp(ω(−ζ + j√(1−ζ²))), ω in rad/sample.
-cplx resonance_pole(double omega, double zeta) {
-  return std::exp(cplx(-zeta * omega, omega * std::sqrt(std::max(0.0, 1 - zeta * zeta))));
+/// Continuous pole of a resonance: ω(−ζ + j√(1−ζ²)), ω in rad/s (rad/sample at sample time 1).
+cplx continuous_pole(double omega, double zeta) {
+  return cplx(-zeta * omega, omega * std::sqrt(std::max(0.0, 1 - zeta * zeta)));
 }
+
+/// Discrete pole of a continuous-like resonance: exp(ω(−ζ + j√(1−ζ²))), ω in rad/sample.
+cplx resonance_pole(double omega, double zeta) { return std::exp(continuous_pole(omega, zeta)); }
+
+/// A continuous-time part d + r/(s − p) [+ r̄/(s − p̄) when `pair`] (the
+/// continuous family of gap_cases.hpp) and its zero-order-hold discretisation
+/// at step h (pole e^{ph}, residue r (e^{ph} − 1)/p; exact for an input held
+/// over each step), used only for the transient from rest (leakage).
+struct CtPart {
+  double d = 0;
+  cplx p, r;
+  bool pair = true;
+  cplx at(cplx s) const {
+    cplx g = d + r / (s - p);
+    if (pair) g += std::conj(r) / (s - std::conj(p));
+    return g;
+  }
+  Section zoh(double h) const {
+    const cplx P = std::exp(p * h), rd = r * (P - 1.0) / p;
+    Section s;
+    s.b0 = d;
+    if (pair) {  // rd/(z − P) + r̄d/(z − P̄) = (2 Re rd q − 2 Re(rd P̄) q²)/(1 − 2 Re P q + |P|² q²)
+      s.a1 = -2 * P.real();
+      s.a2 = std::norm(P);
+      s.b1 = 2 * rd.real() + d * s.a1;
+      s.b2 = -2 * (rd * std::conj(P)).real() + d * s.a2;
+    } else {
+      s.a1 = -P.real();
+      s.b1 = rd.real() + d * s.a1;
+    }
+    return s;
+  }
+};
 
 struct Mode {
   double omega = 0, zeta = 0;  // natural frequency (rad/sample), damping ratio
-  cplx residue;                // c of c/(z − p) + c̄/(z − p̄)
+  cplx residue;                // c of c/(z − p) + c̄/(z − p̄); continuous family: of c/(s − p) + c̄/(s − p̄)
   cplx pole() const { return resonance_pole(omega, zeta); }
+  CtPart ct_part() const { return CtPart{0.0, continuous_pole(omega, zeta), residue, true}; }
+  cplx at(double w, bool continuous) const {
+    return continuous ? ct_part().at(cplx(0, w)) : section().at(std::polar(1.0, -w));
+  }
   Section section() const {
     const cplx p = pole();
     Section s;
@@ -112,17 +150,36 @@ struct Mode {
   }
 };
 
-/// The simulation model in modal form.
+/// The simulation model in modal form; continuous: poles and residues in s
+/// (real_pole then the continuous pole λ < 0).
 struct Base {
   std::vector<Mode> modes;
   bool has_real = false;
   double real_pole = 0, real_residue = 0, D = 0;
+  bool continuous = false;
 };
+
+/// The continuous family (gap_cases.hpp, step 1): the drawn discrete model's
+/// poles mapped by s = ln z (the same ω, ζ) and its residues scaled so that
+/// every mode keeps its peak gain |c|/|Re p| = |c|/(1 − |z_p|) and the real
+/// pole its DC gain r/(1 − a) = −r_c/λ.
+void make_continuous(Base& b) {
+  for (Mode& m : b.modes) {
+    const double sigma = continuous_pole(m.omega, m.zeta).real();
+    m.residue *= -sigma / (1 - std::exp(sigma));
+  }
+  if (b.has_real) {
+    const double lambda = std::log(b.real_pole);
+    b.real_residue *= -lambda / (1 - b.real_pole);
+    b.real_pole = lambda;
+  }
+  b.continuous = true;
+}
 
 StateSpace realise(const Base& b) {
   const int n = 2 * static_cast<int>(b.modes.size()) + (b.has_real ? 1 : 0);
   StateSpace m;
-  m.domain = Domain::Discrete;
+  m.domain = b.continuous ? Domain::Continuous : Domain::Discrete;
   m.sample_time = 1.0;
   m.A = Eigen::MatrixXd::Zero(n, n);
   m.B = Eigen::MatrixXd::Zero(n, 1);
@@ -130,8 +187,9 @@ StateSpace realise(const Base& b) {
   m.D = Eigen::MatrixXd::Constant(1, 1, b.D);
   int i = 0;
   for (const Mode& md : b.modes) {
-    // A = [σ ω'; −ω' σ], B = [0; β], C = [−2 Im c, 2 Re c]/β gives c/(z−p) + c̄/(z−p̄), p = σ + jω'.
-    const cplx p = md.pole();
+    // A = [σ ω'; −ω' σ], B = [0; β], C = [−2 Im c, 2 Re c]/β gives c/(z−p) + c̄/(z−p̄), p = σ + jω'
+    // (in s for a continuous model).
+    const cplx p = b.continuous ? md.ct_part().p : md.pole();
     m.A(i, i) = m.A(i + 1, i + 1) = p.real();
     m.A(i, i + 1) = p.imag();
     m.A(i + 1, i) = -p.imag();
@@ -185,7 +243,13 @@ struct StaticPolynomial {
   double operator()(double x) const { return x + a2 * x * x / r + a3 * x * x * x / (r * r); }
 };
 
+/// The continuous family's fine grid: L samples per sample of the record
+/// (gap_cases.hpp).
+constexpr int kFineGrid = 8;
+
 /// The true system: u → f_in → plant → f_out → sensor → gain → delay.
+/// Discrete: the Sections. Continuous: the CtParts (the Sections empty
+/// until `discretised`).
 struct Chain {
   std::vector<Section> parallel;  // plant = D + Σ parallel, then × Π series
   std::vector<Section> series;
@@ -194,18 +258,42 @@ struct Chain {
   StaticPolynomial loop_nl;        // feedback f(y) − y: the plant's input is x − (loop_nl(y) − y)
   std::vector<Section> sensor;
   double gain = 1, delay = 0, leak = 0;
+  bool continuous = false;
+  std::vector<CtPart> ct_parallel, ct_series, ct_sensor;
 
-  cplx plant_at(cplx q) const {
+  // At the line of angular frequency ω (rad per record sample) and q = e^{−jω h},
+  // h the grid's step in record samples (1, or 1/kFineGrid on the fine grid).
+  cplx plant_at(double omega, cplx q) const {
     cplx g = D;
+    if (continuous) {
+      const cplx s(0, omega);
+      for (const CtPart& p : ct_parallel) g += p.at(s);
+      for (const CtPart& p : ct_series) g *= p.at(s);
+      return g;
+    }
     for (const Section& s : parallel) g += s.at(q);
     for (const Section& s : series) g *= s.at(q);
     return g;
   }
   cplx meas_at(double omega, cplx q, bool with_delay = true) const {
     cplx g = gain;
-    for (const Section& s : sensor) g *= s.at(q);
+    if (continuous) {
+      for (const CtPart& p : ct_sensor) g *= p.at(cplx(0, omega));
+    } else {
+      for (const Section& s : sensor) g *= s.at(q);
+    }
     if (with_delay && delay != 0) g *= std::polar(1.0, -omega * delay);
     return g;
+  }
+  // A continuous chain's zero-order-hold discretisation on the fine grid (step 1/kFineGrid).
+  Chain discretised() const {
+    Chain d = *this;
+    d.continuous = false;
+    const double h = 1.0 / kFineGrid;
+    for (const CtPart& p : ct_parallel) d.parallel.push_back(p.zoh(h));
+    for (const CtPart& p : ct_series) d.series.push_back(p.zoh(h));
+    for (const CtPart& p : ct_sensor) d.sensor.push_back(p.zoh(h));
+    return d;
   }
   // The plant with the loop closed, y = plant(x − f(y)), f(y) = loop_nl(y) − y,
   // simulated sample by sample over x from the section states `w` (zero: from
@@ -248,6 +336,7 @@ Chain make_chain(const Base& base, const std::vector<const Injected*>& effects) 
   std::vector<Mode> modes = base.modes;
   Chain c;
   c.D = base.D;
+  c.continuous = base.continuous;
   for (const Injected* e : effects) {
     const double s = e->scale;
     switch (e->effect) {
@@ -257,6 +346,12 @@ Chain make_chain(const Base& base, const std::vector<const Injected*>& effects) 
         const double T = s * e->time_constant0;
         if (T <= 0) break;
         const double wc = 1 / T;
+        if (c.continuous) {  // ω_c/(s + ω_c), or ω_c²/(s² + 2ζω_c s + ω_c²)
+          const cplx p = continuous_pole(wc, e->sensor_zeta);
+          c.ct_sensor.push_back(e->order == 1 ? CtPart{0.0, cplx(-wc, 0), cplx(wc, 0), false}
+                                              : CtPart{0.0, p, wc * wc / (p - std::conj(p)), true});
+          break;
+        }
         Section sec;
         if (e->order == 1) {
           const double a = std::exp(-wc);
@@ -272,7 +367,12 @@ Chain make_chain(const Base& base, const std::vector<const Injected*>& effects) 
         break;
       }
       case Effect::UnmodelledMode:
-        if (e->series) {
+        if (e->series && c.continuous) {
+          // (s² + 2ζ_z ω s + ω²)/(s² + 2ζ ω s + ω²) = 1 + 2(ζ_z − ζ) ω s/((s − p)(s − p̄)): unit DC gain
+          const cplx p = continuous_pole(e->extra_omega, e->extra_zeta);
+          const double dz = e->extra_zeta * s * e->kappa0;
+          c.ct_series.push_back(CtPart{1.0, p, 2 * dz * e->extra_omega * p / (p - std::conj(p)), true});
+        } else if (e->series) {
           const cplx p = resonance_pole(e->extra_omega, e->extra_zeta);
           const cplx z = resonance_pole(e->extra_omega, e->extra_zeta * (1 + s * e->kappa0));
           Section sec;
@@ -287,7 +387,11 @@ Chain make_chain(const Base& base, const std::vector<const Injected*>& effects) 
           c.series.push_back(sec);
         } else {
           Mode m{e->extra_omega, e->extra_zeta, s * e->extra_residue0};
-          c.parallel.push_back(m.section());
+          if (c.continuous) {
+            c.ct_parallel.push_back(m.ct_part());
+          } else {
+            c.parallel.push_back(m.section());
+          }
         }
         break;
       case Effect::ModeMismatch:
@@ -301,6 +405,12 @@ Chain make_chain(const Base& base, const std::vector<const Injected*>& effects) 
       case Effect::Leakage: c.leak = s; break;
     }
   }
+  if (c.continuous) {
+    for (const Mode& m : modes) c.ct_parallel.push_back(m.ct_part());
+    if (base.has_real)
+      c.ct_parallel.push_back(CtPart{0.0, cplx(base.real_pole, 0), cplx(base.real_residue, 0), false});
+    return c;
+  }
   for (const Mode& m : modes) c.parallel.push_back(m.section());
   if (base.has_real) {
     Section sec;
@@ -313,6 +423,8 @@ Chain make_chain(const Base& base, const std::vector<const Injected*>& effects) 
 }
 
 // ---------------------------------------------------------------------------
+struct FineGrid;
+
 /// Everything fixed before the effects are calibrated.
 struct Setting {
   int P = 0, M = 0, K = 0;
@@ -324,6 +436,32 @@ struct Setting {
   std::vector<cplx> Hsim;         // simulation model at every bin
   std::vector<double> y_sim;      // one period of its steady-state output
   std::vector<double> w;          // noise shape |H_v|² at every bin (mean 1 over the excited lines)
+  std::shared_ptr<FineGrid> fine;  // the continuous family's fine grid; null for discrete cases
+};
+
+/// The continuous family's grid of kFineGrid · P samples per period: the
+/// band-limited input interpolated exactly (U zero-padded, scaled by √L for
+/// the unitary DFT of L·P samples), ω in rad per record sample (up to L π),
+/// q = e^{−jω/L}.
+struct FineGrid {
+  Setting st;
+  Fft fft;
+  explicit FineGrid(const Setting& coarse) : fft(kFineGrid * coarse.P, kWhere) {
+    const int L = kFineGrid;
+    st.P = L * coarse.P;
+    st.M = coarse.M;
+    st.K = coarse.K;
+    const std::size_t bins = static_cast<std::size_t>(st.P / 2 + 1);
+    st.U.assign(bins, 0.0);
+    for (std::size_t k = 0; k + 1 < coarse.U.size(); ++k) st.U[k] = std::sqrt(static_cast<double>(L)) * coarse.U[k];
+    st.u = fft.inverse(st.U);
+    st.omega.resize(bins);
+    st.q.resize(bins);
+    for (std::size_t k = 0; k < bins; ++k) {
+      st.omega[k] = kTwoPi * static_cast<double>(k) / coarse.P;
+      st.q[k] = std::polar(1.0, -kTwoPi * static_cast<double>(k) / st.P);
+    }
+  }
 };
 
 /// One period of the loop's periodic steady state for the periodic plant
@@ -350,6 +488,40 @@ bool loop_steady(const Chain& c, const std::vector<double>& x, std::vector<doubl
   return false;
 }
 
+/// The continuous loop's periodic steady state by harmonic balance on the
+/// grid of `st` (the fine grid): Y = G(jω) (X − F[f(y)]), iterated from the
+/// linear response Y = G X. The spring's magnitude bound (draw_nonlinearity:
+/// |f'| max|G| ≤ 1/2 over the lines, for |y| ≤ 3 r) is meant to make the map a
+/// contraction of factor ≤ 1/2 — then it converges geometrically and, once a
+/// step changes y by ≤ 1e-12 of its peak, the remaining steps sum to no more
+/// than that step; at most 200 steps. X: the plant input's spectrum on entry, the plant
+/// output's on return. False when it does not converge.
+bool harmonic_balance(const Chain& c, const Setting& st, Fft& fft, std::vector<cplx>& X) {
+  const std::size_t bins = X.size();
+  std::vector<cplx> G(bins), Y(bins);
+  for (std::size_t k = 0; k < bins; ++k) Y[k] = (G[k] = c.plant_at(st.omega[k], st.q[k])) * X[k];
+  std::vector<double> y = fft.inverse(Y);
+  for (int it = 0; it < 200; ++it) {
+    std::vector<double> f(y.size());
+    for (std::size_t t = 0; t < y.size(); ++t) f[t] = c.loop_nl(y[t]) - y[t];
+    const std::vector<cplx> F = fft.forward(f.data());
+    for (std::size_t k = 0; k < bins; ++k) Y[k] = G[k] * (X[k] - F[k]);
+    std::vector<double> next = fft.inverse(Y);
+    double peak = 0, step = 0;
+    for (std::size_t t = 0; t < y.size(); ++t) {
+      peak = std::max(peak, std::abs(next[t]));
+      step = std::max(step, std::abs(next[t] - y[t]));
+    }
+    if (!std::isfinite(step) || peak > 1e6 * c.loop_nl.r) return false;
+    y.swap(next);
+    if (step <= 1e-12 * peak) {
+      X = Y;
+      return true;
+    }
+  }
+  return false;
+}
+
 /// Steady-state output spectrum (bins 0 … P/2) of one period; empty when the
 /// chain's loop does not settle.
 std::vector<cplx> steady(const Chain& c, const Setting& st, Fft& fft, bool with_delay) {
@@ -360,12 +532,14 @@ std::vector<cplx> steady(const Chain& c, const Setting& st, Fft& fft, bool with_
     for (double& v : x) v = c.in_nl(v);
     X = fft.forward(x.data());
   }
-  if (c.loop_nl.on) {
+  if (c.loop_nl.on && c.continuous) {
+    if (!harmonic_balance(c, st, fft, X)) return {};
+  } else if (c.loop_nl.on) {
     std::vector<double> y;
     if (!loop_steady(c, fft.inverse(X), y)) return {};
     X = fft.forward(y.data());
   } else {
-    for (std::size_t k = 0; k < bins; ++k) X[k] *= c.plant_at(st.q[k]);
+    for (std::size_t k = 0; k < bins; ++k) X[k] *= c.plant_at(st.omega[k], st.q[k]);
   }
   if (c.out_nl.on) {
     std::vector<double> x = fft.inverse(X);
@@ -375,6 +549,24 @@ std::vector<cplx> steady(const Chain& c, const Setting& st, Fft& fft, bool with_
   for (std::size_t k = 0; k < bins; ++k) X[k] *= c.meas_at(st.omega[k], st.q[k], with_delay);
   X.back() = X.back().real();  // P/2: a real signal's line (a fractional delay there has no real meaning)
   return X;
+}
+
+/// The steady state of the record's samples (bins 0 … P/2 of one period),
+/// either family: a continuous chain with a nonlinear stage is computed on
+/// the fine grid (harmonics of the polynomials up to kFineGrid/2 times the
+/// sample rate kept at their own frequencies) and then sampled every
+/// kFineGrid-th point, as an ideal sampler does; a linear one per line (the
+/// input is band-limited, so sampling changes nothing). Empty when the loop
+/// does not settle.
+std::vector<cplx> response(const Chain& c, const Setting& st, Fft& fft, bool with_delay) {
+  if (!c.continuous || !(c.in_nl.on || c.out_nl.on || c.loop_nl.on)) return steady(c, st, fft, with_delay);
+  FineGrid& fine = *st.fine;
+  const std::vector<cplx> Yf = steady(c, fine.st, fine.fft, with_delay);
+  if (Yf.empty()) return {};
+  const std::vector<double> yf = fine.fft.inverse(Yf);
+  std::vector<double> y(static_cast<std::size_t>(st.P));
+  for (std::size_t t = 0; t < y.size(); ++t) y[t] = yf[t * kFineGrid];
+  return fft.forward(y.data());
 }
 
 /// The transient of the chain started from rest (delay left out): y_rest(t) − y_ss(t), over `periods` periods.
@@ -398,6 +590,24 @@ std::vector<double> transient(const Chain& c, const Setting& st, const std::vect
   }
   for (std::size_t t = 0; t < N; ++t) y[t] = c.gain * y[t] - y_ss_nodelay[t % P];
   return y;
+}
+
+/// transient() for either family: a continuous chain's from its
+/// zero-order-hold discretisation on the fine grid (Chain::discretised), its
+/// steady state and its start from rest both of that discretisation, sampled
+/// every kFineGrid-th point. Its poles, and so the shape of its free
+/// response, are the continuous chain's exactly; its initial state is
+/// the discretisation's (the hold delays the input by half a fine step).
+std::vector<double> transient_of(const Chain& c, const Setting& st, const std::vector<double>& y_ss_nodelay, int periods) {
+  if (!c.continuous) return transient(c, st, y_ss_nodelay, periods);
+  FineGrid& fine = *st.fine;
+  const Chain d = c.discretised();
+  const std::vector<cplx> Yf = steady(d, fine.st, fine.fft, false);
+  if (Yf.empty()) return std::vector<double>(static_cast<std::size_t>(st.P) * static_cast<std::size_t>(periods), 0.0);
+  const std::vector<double> tf = transient(d, fine.st, fine.fft.inverse(Yf), periods);
+  std::vector<double> tr(static_cast<std::size_t>(st.P) * static_cast<std::size_t>(periods));
+  for (std::size_t t = 0; t < tr.size(); ++t) tr[t] = tf[t * kFineGrid];
+  return tr;
 }
 
 /// tr delayed by τ ≥ 0 samples with an ideal (band-limited) delay, truncated
@@ -450,8 +660,8 @@ class Calibrator {
     std::vector<double> r;
     switch (e.effect) {
       case Effect::Nonlinearity: {
-        if (e.in_loop) {  // the distortion of the closed loop (no deviation when it does not settle)
-          const std::vector<cplx> Y = steady(make_chain(base_, {&es}), st_, fft_, true);
+        if (e.in_loop || base_.continuous) {  // the distortion of the chain (none when its loop does not settle)
+          const std::vector<cplx> Y = response(make_chain(base_, {&es}), st_, fft_, true);
           for (int k : st_.unexcited_band)
             r.push_back(Y.empty() ? 0.0 : std::norm(Y[static_cast<std::size_t>(k)]) * st_.M / st_.w[static_cast<std::size_t>(k)]);
           break;
@@ -470,7 +680,7 @@ class Calibrator {
       case Effect::Leakage: {
         if (T1_.empty()) {
           const Chain c = make_chain(base_, {});
-          const std::vector<double> tr = transient(c, st_, st_.y_sim, 1);
+          const std::vector<double> tr = transient_of(c, st_, st_.y_sim, 1);
           T1_ = fft_.forward(tr.data());
         }
         for (int k : st_.band)
@@ -481,7 +691,7 @@ class Calibrator {
         const Chain c = make_chain(base_, {&es});
         for (int k : st_.excited) {
           const std::size_t i = static_cast<std::size_t>(k);
-          const cplx dY = (c.plant_at(st_.q[i]) * c.meas_at(st_.omega[i], st_.q[i]) - st_.Hsim[i]) * st_.U[i];
+          const cplx dY = (c.plant_at(st_.omega[i], st_.q[i]) * c.meas_at(st_.omega[i], st_.q[i]) - st_.Hsim[i]) * st_.U[i];
           r.push_back(std::norm(dY) * st_.M / st_.w[i]);
         }
       }
@@ -626,10 +836,9 @@ void draw_unmodelled_mode(Injected& e, Draw& d, bool clear, const Base& base, co
   } else {
     const double rho = clear ? d.log_uniform(0.2, 1.0) : d.log_uniform(0.01, 0.05);
     const cplx unit = d.sign() * std::polar(1.0, -kPi / 2 + d.uniform(-0.4, 0.4));
-    const cplx qm = std::polar(1.0, -best);
-    const double unit_peak = std::abs(Mode{best, e.extra_zeta, unit}.section().at(qm));
+    const double unit_peak = std::abs(Mode{best, e.extra_zeta, unit}.at(best, base.continuous));
     Chain sim = make_chain(base, {});
-    e.extra_residue0 = unit * rho * std::abs(sim.plant_at(qm)) / unit_peak;
+    e.extra_residue0 = unit * rho * std::abs(sim.plant_at(best, std::polar(1.0, -best))) / unit_peak;
     e.scale_max = 5.0 / rho;
   }
 }
@@ -841,7 +1050,7 @@ void simulate_model(const Base& base, Fft& fft, Setting& st) {
   st.Hsim.resize(bins);
   std::vector<cplx> Y(bins);
   for (std::size_t k = 0; k < bins; ++k) {
-    st.Hsim[k] = sim.plant_at(st.q[k]);
+    st.Hsim[k] = sim.plant_at(st.omega[k], st.q[k]);
     Y[k] = st.Hsim[k] * st.U[k];
   }
   st.y_sim = fft.inverse(Y);
@@ -1017,7 +1226,7 @@ TrueOutput true_output(const Base& base, const std::vector<Injected>& effects, c
   for (const Injected& e : effects) ptrs.push_back(&e);
   const Chain truth_chain = make_chain(base, ptrs);
   TrueOutput out;
-  out.Y = steady(truth_chain, st, fft, true);
+  out.Y = response(truth_chain, st, fft, true);
   if (out.Y.empty())
     throw Error(ErrorKind::Numerical, kWhere, "the nonlinearity's loop does not settle at the calibrated magnitude");
   const std::vector<double> y_ss = fft.inverse(out.Y);
@@ -1025,8 +1234,8 @@ TrueOutput true_output(const Base& base, const std::vector<Injected>& effects, c
   out.y.resize(N);
   for (std::size_t t = 0; t < N; ++t) out.y[t] = y_ss[t % static_cast<std::size_t>(P)];
   if (truth_chain.leak > 0) {
-    const std::vector<double> y_nd = fft.inverse(steady(truth_chain, st, fft, false));
-    const std::vector<double> tr = delay_transient(transient(truth_chain, st, y_nd, M + 1), y_nd, truth_chain.delay, N);
+    const std::vector<double> y_nd = fft.inverse(response(truth_chain, st, fft, false));
+    const std::vector<double> tr = delay_transient(transient_of(truth_chain, st, y_nd, M + 1), y_nd, truth_chain.delay, N);
     for (std::size_t t = 0; t < N; ++t) out.y[t] += truth_chain.leak * tr[t];
     for (int t = 0; t < P; ++t) out.transient_energy += std::pow(truth_chain.leak * tr[static_cast<std::size_t>(t)], 2);
   }
@@ -1124,13 +1333,14 @@ void write_truth(const GapCaseOptions& o, const Base& base, const Setting& st, c
   for (const Mode& m : base.modes)
     modes.push_back({{"frequency", m.omega / kTwoPi},
                      {"damping", m.zeta},
-                     {"damped_frequency", std::arg(m.pole()) / kTwoPi},
+                     {"damped_frequency", (o.continuous ? m.ct_part().p.imag() : std::arg(m.pole())) / kTwoPi},
                      {"residue", {m.residue.real(), m.residue.imag()}}});
   json& t = out.truth;
   t["effects"] = json::array();
   for (Effect e : o.effects) t["effects"].push_back(to_string(e));
   t["strength"] = effects.empty() ? "none" : to_string(o.strength);
   t["family"] = o.structure ? "structure" : "classic";
+  t["domain"] = o.continuous ? "continuous" : "discrete";
   t["seed"] = o.seed;
   t["period"] = st.P;
   t["periods"] = st.M;
@@ -1203,7 +1413,11 @@ GapCase make_gap_case(const GapCaseOptions& o) {
   // Resonances inside the excited band.
   const double w_band = kTwoPi * st.K / st.P;
   const double w_lo = std::max(0.08 * w_band, kTwoPi * 2 / st.P), w_hi = 0.9 * w_band;
-  const Base base = o.structure ? draw_structure(d, w_lo, w_hi) : draw_system(d, w_lo, w_hi);
+  Base base = o.structure ? draw_structure(d, w_lo, w_hi) : draw_system(d, w_lo, w_hi);
+  if (o.continuous) {
+    make_continuous(base);
+    st.fine = std::make_shared<FineGrid>(st);
+  }
   simulate_model(base, fft, st);
   const Section hv = draw_noise_filter(d, st, o.structure);  // drawn either way: the same draws follow
   CaseNumbers n;

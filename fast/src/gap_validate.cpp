@@ -38,6 +38,7 @@ GapCaseOptions schedule(const GapValidationOptions& o, int i, std::string& categ
   c.seed = o.seed * 1000003ULL + static_cast<std::uint64_t>(i);
   c.structure = o.family == GapFamily::Structure || (o.family == GapFamily::Mixed && (i / 20) % 2 == 1);
   c.measured_noise = o.measured_noise;
+  c.continuous = o.continuous;
   const auto& names = kAllEffects;
   const int slot = i % 20;
   if (slot < 2) {

@@ -50,6 +50,25 @@
 /// settle counts as no deviation and its magnitude is not used). Its strength
 /// is the distortion on the unexcited lines, as for the static polynomial.
 ///
+/// Continuous family (`continuous = true`, issue 17 item 5; with either family
+/// above, the same draws): the simulation model is continuous-time (domain
+/// "continuous", sample time 1: ω in rad/s = rad/sample) — the drawn poles
+/// mapped by s = ln z (the same ω and ζ), the residues scaled so that each mode
+/// keeps its peak gain |c|/|Re p| and the real pole its DC gain — and so is
+/// every stage of the true system: the sensor ω_c/(s + ω_c) or
+/// ω_c²/(s² + 2ζω_c s + ω_c²), the series mode (s² + 2ζ_z ω s + ω²)/(s² + 2ζ ω s + ω²),
+/// a parallel mode c/(s − p) + c̄/(s − p̄), the delay e^{−jωτ}. The input is the
+/// band-limited multisine of step 2 (its continuous-time signal sampled
+/// exactly), so a linear chain's record is exact per line, Y(k) = G(jω_k) U(k).
+/// A nonlinear stage acts on a grid 8 times finer (the input interpolated
+/// exactly; harmonics of the polynomials kept at their own frequencies up to 4
+/// times the sample rate) and the record samples every 8th point, as an ideal
+/// sampler does; the spring in the loop's steady state there by harmonic
+/// balance, Y = G(jω)(X − F[f(y)]) iterated from the linear response. Leakage's
+/// transient comes from the chain's zero-order-hold discretisation on that grid
+/// (the continuous chain's poles exactly; its initial state the hold's, which
+/// delays the input by 1/16 sample).
+///
 /// Measured noise (`measured_noise`, issue 17 item 5: effects injected into
 /// real measured noise; the model, excitation and effects are drawn exactly as
 /// without it): the output noise is not H_v e but measured noise periods
@@ -129,13 +148,14 @@ struct GapCaseOptions {
   std::uint64_t seed = 1;
   bool noise = true;                 ///< testing hook: false leaves out the input and output noise (nothing else changes)
   bool structure = false;            ///< the structure family (above)
+  bool continuous = false;           ///< continuous-time model and true system (above)
   /// Measured noise (above); null: the synthetic noise of step 4. Needs
   /// period == measured_noise->period and periods ≤ its pool size.
   std::shared_ptr<const MeasuredNoise> measured_noise;
 };
 
 struct GapCase {
-  StateSpace sim_model;              ///< what the user has: discrete, sample_time 1
+  StateSpace sim_model;              ///< what the user has: discrete (continuous with `continuous`), sample_time 1
   Eigen::MatrixXd record;            ///< P·M rows × 2 columns (u, y)
   RecordMeta meta;                   ///< period, periods, sample_time = 1, excited_lines
   std::vector<Effect> effects;       ///< the truth, in the order given

@@ -12,7 +12,8 @@
 /// Families (gap_cases.hpp): classic (the default), structure (every case
 /// from the structure family: lightly damped many-mode structures, noise
 /// rising with frequency, the nonlinearity a spring in the loop), or mixed
-/// (cycles of 20 alternate: classic, structure, classic, …). Either family
+/// (cycles of 20 alternate: classic, structure, classic, …). Any of them can
+/// be continuous-time (`continuous`; gap_cases.hpp). Either family
 /// can take measured noise instead of its synthetic noise (`measured_noise`;
 /// gap_cases.hpp): the same draws otherwise, P the noise record's.
 #include <cstdint>
@@ -37,6 +38,7 @@ const char* to_string(GapFamily family);
 struct GapValidationOptions {
   int cases = 100;
   GapFamily family = GapFamily::Classic;
+  bool continuous = false;  ///< continuous-time models and true systems (gap_cases.hpp)
   std::uint64_t seed = 1;
   int period = 1024, periods = 8;
   std::string workdir;  ///< where the case files go (created; removed afterwards unless keep_files)
