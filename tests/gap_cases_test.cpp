@@ -430,18 +430,28 @@ std::vector<double> rk4_period(const GapCase& c, const nlohmann::json& nl, doubl
   const bool loop = nl["location"] == "loop";
   auto poly = [&](double x) { return a2 * x * x / r + a3 * x * x * x / (r * r); };
   auto input = [&](const Eigen::VectorXd& x, double u) {
-    return loop ? u - poly((m.C * x)(0)) : u + poly(u);
+    return loop ? u - poly(m.C.row(0).dot(x)) : u + poly(u);
   };
-  auto f = [&](const Eigen::VectorXd& x, double u) -> Eigen::VectorXd { return m.A * x + m.B.col(0) * input(x, u); };
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(m.order());
+  const Eigen::Index n = m.order();
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(n), k1(n), k2(n), k3(n), k4(n), xs(n);  // no allocation per step
+  auto f = [&](const Eigen::VectorXd& at, double u, Eigen::VectorXd& out) {
+    out.noalias() = m.A * at;
+    out += m.B.col(0) * input(at, u);
+  };
   std::vector<double> prev, cur(static_cast<std::size_t>(P));
   for (int period = 0; period < 4000; ++period) {
     for (int t = 0; t < P; ++t) {
-      cur[static_cast<std::size_t>(t)] = (m.C * x)(0) + m.D(0, 0) * input(x, ut[static_cast<std::size_t>(2 * t * steps)]);
+      cur[static_cast<std::size_t>(t)] = m.C.row(0).dot(x) + m.D(0, 0) * input(x, ut[static_cast<std::size_t>(2 * t * steps)]);
       for (int s = 0; s < steps; ++s) {
         const std::size_t i = static_cast<std::size_t>(2 * (t * steps + s));
         const double u0 = ut[i], u1 = ut[i + 1], u2 = ut[(i + 2) % ut.size()];
-        const Eigen::VectorXd k1 = f(x, u0), k2 = f(x + h / 2 * k1, u1), k3 = f(x + h / 2 * k2, u1), k4 = f(x + h * k3, u2);
+        f(x, u0, k1);
+        xs = x + h / 2 * k1;
+        f(xs, u1, k2);
+        xs = x + h / 2 * k2;
+        f(xs, u1, k3);
+        xs = x + h * k3;
+        f(xs, u2, k4);
         x += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
       }
     }

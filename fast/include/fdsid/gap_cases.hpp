@@ -168,7 +168,8 @@ struct GapCase {
   /// "noise" {"scale" (ν), "filter" {"b", "a"} (H_v in z^-1), "input_std";
   /// with measured noise also "measured" {"sources", "pool", "chosen" (pool
   /// indices, in record order), "factor" (the samples' scale)}},
-  /// "system" {"modes" [{"frequency", "damping", "residue" [re, im]}], "real_pole", "D"},
+  /// "system" {"modes" [{"frequency", "damping", "residue" [re, im]}], "real_pole", "D"} (continuous: the
+  /// residues and the real pole in s), "domain" ("discrete" or "continuous"),
   /// "excitation" {"band_line" (K), "lines", "rms"}, "ratio_combined" (all
   /// effects together, on the excited lines), and "details" {name: {"ratio",
   /// "target_ratio", "scale", "bands", parameters…}} per effect.
