@@ -100,6 +100,23 @@ cplx continuous_pole(double omega, double zeta) {
 /// Discrete pole of a continuous-like resonance: exp(ω(−ζ + j√(1−ζ²))), ω in rad/sample.
 cplx resonance_pole(double omega, double zeta) { return std::exp(continuous_pole(omega, zeta)); }
 
+/// The section of r/(z − P) [+ r̄/(z − P̄) when `pair`]: in q = z⁻¹,
+/// (2 Re r q − 2 Re(r P̄) q²)/(1 − 2 Re P q + |P|² q²), or r q/(1 − P q).
+Section partial_fraction(cplx P, cplx r, bool pair) {
+  Section s;
+  s.b0 = 0;
+  if (pair) {
+    s.b1 = 2 * r.real();
+    s.b2 = -2 * (r * std::conj(P)).real();
+    s.a1 = -2 * P.real();
+    s.a2 = std::norm(P);
+  } else {
+    s.b1 = r.real();
+    s.a1 = -P.real();
+  }
+  return s;
+}
+
 /// A continuous-time part d + r/(s − p) [+ r̄/(s − p̄) when `pair`] (the
 /// continuous family of gap_cases.hpp) and its zero-order-hold discretisation
 /// at step h (pole e^{ph}, residue r (e^{ph} − 1)/p; exact for an input held
@@ -114,18 +131,11 @@ struct CtPart {
     return g;
   }
   Section zoh(double h) const {
-    const cplx P = std::exp(p * h), rd = r * (P - 1.0) / p;
-    Section s;
-    s.b0 = d;
-    if (pair) {  // rd/(z − P) + r̄d/(z − P̄) = (2 Re rd q − 2 Re(rd P̄) q²)/(1 − 2 Re P q + |P|² q²)
-      s.a1 = -2 * P.real();
-      s.a2 = std::norm(P);
-      s.b1 = 2 * rd.real() + d * s.a1;
-      s.b2 = -2 * (rd * std::conj(P)).real() + d * s.a2;
-    } else {
-      s.a1 = -P.real();
-      s.b1 = rd.real() + d * s.a1;
-    }
+    const cplx P = std::exp(p * h);
+    Section s = partial_fraction(P, r * (P - 1.0) / p, pair);
+    s.b0 = d;  // + d (1 + a1 q + a2 q²)/(1 + a1 q + a2 q²)
+    s.b1 += d * s.a1;
+    s.b2 += d * s.a2;
     return s;
   }
 };
@@ -138,16 +148,7 @@ struct Mode {
   cplx at(double w, bool continuous) const {
     return continuous ? ct_part().at(cplx(0, w)) : section().at(std::polar(1.0, -w));
   }
-  Section section() const {
-    const cplx p = pole();
-    Section s;
-    s.b0 = 0;
-    s.b1 = 2 * residue.real();
-    s.b2 = -2 * (residue * std::conj(p)).real();
-    s.a1 = -2 * p.real();
-    s.a2 = std::norm(p);
-    return s;
-  }
+  Section section() const { return partial_fraction(pole(), residue, true); }
 };
 
 /// The simulation model in modal form; continuous: poles and residues in s
@@ -412,13 +413,7 @@ Chain make_chain(const Base& base, const std::vector<const Injected*>& effects) 
     return c;
   }
   for (const Mode& m : modes) c.parallel.push_back(m.section());
-  if (base.has_real) {
-    Section sec;
-    sec.b0 = 0;
-    sec.b1 = base.real_residue;
-    sec.a1 = -base.real_pole;
-    c.parallel.push_back(sec);
-  }
+  if (base.has_real) c.parallel.push_back(partial_fraction(base.real_pole, base.real_residue, false));
   return c;
 }
 
@@ -551,6 +546,13 @@ std::vector<cplx> steady(const Chain& c, const Setting& st, Fft& fft, bool with_
   return X;
 }
 
+/// Every kFineGrid-th sample of a fine-grid signal: the first n (an ideal sampler).
+std::vector<double> sampled(const std::vector<double>& fine, std::size_t n) {
+  std::vector<double> x(n);
+  for (std::size_t t = 0; t < n; ++t) x[t] = fine[t * kFineGrid];
+  return x;
+}
+
 /// The steady state of the record's samples (bins 0 … P/2 of one period),
 /// either family: a continuous chain with a nonlinear stage is computed on
 /// the fine grid (harmonics of the polynomials up to kFineGrid/2 times the
@@ -563,9 +565,7 @@ std::vector<cplx> response(const Chain& c, const Setting& st, Fft& fft, bool wit
   FineGrid& fine = *st.fine;
   const std::vector<cplx> Yf = steady(c, fine.st, fine.fft, with_delay);
   if (Yf.empty()) return {};
-  const std::vector<double> yf = fine.fft.inverse(Yf);
-  std::vector<double> y(static_cast<std::size_t>(st.P));
-  for (std::size_t t = 0; t < y.size(); ++t) y[t] = yf[t * kFineGrid];
+  const std::vector<double> y = sampled(fine.fft.inverse(Yf), static_cast<std::size_t>(st.P));
   return fft.forward(y.data());
 }
 
@@ -604,10 +604,8 @@ std::vector<double> transient_of(const Chain& c, const Setting& st, const std::v
   const Chain d = c.discretised();
   const std::vector<cplx> Yf = steady(d, fine.st, fine.fft, false);
   if (Yf.empty()) return std::vector<double>(static_cast<std::size_t>(st.P) * static_cast<std::size_t>(periods), 0.0);
-  const std::vector<double> tf = transient(d, fine.st, fine.fft.inverse(Yf), periods);
-  std::vector<double> tr(static_cast<std::size_t>(st.P) * static_cast<std::size_t>(periods));
-  for (std::size_t t = 0; t < tr.size(); ++t) tr[t] = tf[t * kFineGrid];
-  return tr;
+  return sampled(transient(d, fine.st, fine.fft.inverse(Yf), periods),
+                 static_cast<std::size_t>(st.P) * static_cast<std::size_t>(periods));
 }
 
 /// tr delayed by τ ≥ 0 samples with an ideal (band-limited) delay, truncated
