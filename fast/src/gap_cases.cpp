@@ -9,6 +9,7 @@
 
 #include "fdsid/error.hpp"
 #include "numerics/fft.hpp"
+#include "numerics/optimize.hpp"
 #include "numerics/random.hpp"
 
 namespace fdsid {
@@ -221,6 +222,7 @@ using Fft = numerics::UnitaryFft;
 struct Injected {
   Effect effect = Effect::GainError;
   double scale = 1, scale_max = 1, target = 0, ratio = 0;
+  double delay_equivalent = 0, ratio_undelayed = 0;    // continuous sensor: the delay taken out of `ratio`, and the ratio with it
   double gain0 = 1;                                    // gain_error: g = 1 + s (g0 − 1)
   double delay0 = 0;                                   // delay: τ = s τ0
   int order = 1;                                       // sensor_dynamics: order, T = s T0, ω_c = 1/T
@@ -652,7 +654,10 @@ class Calibrator {
  public:
   Calibrator(const Base& base, const Setting& st, Fft& fft) : base_(base), st_(st), fft_(fft) {}
 
-  double deviation(const Injected& e, double s, std::vector<double>* per_line = nullptr) {
+  /// For a continuous sensor, *delay (when asked) is the delay τ removed
+  /// from its deviation (delay_equivalent); 0 for every other effect.
+  double deviation(const Injected& e, double s, std::vector<double>* per_line = nullptr, double* delay = nullptr) {
+    if (delay) *delay = 0;
     Injected es = e;
     es.scale = s;
     std::vector<double> r;
@@ -686,12 +691,10 @@ class Calibrator {
         break;
       }
       default: {
-        const Chain c = make_chain(base_, {&es});
-        for (int k : st_.excited) {
-          const std::size_t i = static_cast<std::size_t>(k);
-          const cplx dY = (c.plant_at(st_.omega[i], st_.q[i]) * c.meas_at(st_.omega[i], st_.q[i]) - st_.Hsim[i]) * st_.U[i];
-          r.push_back(std::norm(dY) * st_.M / st_.w[i]);
-        }
+        const std::vector<cplx> G = frf(es);
+        const double tau = base_.continuous && e.effect == Effect::SensorDynamics ? delay_equivalent(G) : 0.0;
+        if (delay) *delay = tau;
+        r = weighted_deviation(G, tau);
       }
     }
     const double A = r.empty() ? 0.0 : std::accumulate(r.begin(), r.end(), 0.0) / static_cast<double>(r.size());
@@ -703,7 +706,55 @@ class Calibrator {
     return e.effect == Effect::Nonlinearity ? st_.unexcited_band : e.effect == Effect::Leakage ? st_.band : st_.excited;
   }
 
+  /// A linear effect's Σ-normalised deviation with no delay removed (the
+  /// same as deviation() for every effect but the continuous sensor).
+  double undelayed_deviation(const Injected& e, double s) const {
+    Injected es = e;
+    es.scale = s;
+    const std::vector<double> r = weighted_deviation(frf(es), 0.0);
+    return std::accumulate(r.begin(), r.end(), 0.0) / static_cast<double>(r.size());
+  }
+
  private:
+  // The true FRF at the excited lines with the linear effect es alone.
+  std::vector<cplx> frf(const Injected& es) const {
+    const Chain c = make_chain(base_, {&es});
+    std::vector<cplx> G;
+    for (int k : st_.excited) {
+      const std::size_t i = static_cast<std::size_t>(k);
+      G.push_back(c.plant_at(st_.omega[i], st_.q[i]) * c.meas_at(st_.omega[i], st_.q[i]));
+    }
+    return G;
+  }
+
+  // Per excited line, |(G(k) − G_sim(k) e^{−jω_k τ}) U(k)|² M / σ²(k)/ν.
+  std::vector<double> weighted_deviation(const std::vector<cplx>& G, double tau) const {
+    std::vector<double> r;
+    for (std::size_t j = 0; j < G.size(); ++j) {
+      const std::size_t i = static_cast<std::size_t>(st_.excited[j]);
+      const cplx dY = (G[j] - st_.Hsim[i] * std::polar(1.0, -st_.omega[i] * tau)) * st_.U[i];
+      r.push_back(std::norm(dY) * st_.M / st_.w[i]);
+    }
+    return r;
+  }
+
+  // The continuous sensor's calibration (gap_cases.hpp, "Strength
+  // calibration"): the delay τ ≥ 0 that explains most of G − G_sim, i.e.
+  // minimises Σ_k |(G − G_sim e^{−jωτ}) U|² M/σ² over [0, 2π/ω_edge] (ω_edge
+  // the highest excited line; a full turn of phase there: a sensor whose phase
+  // lag at the band edge exceeds it is nowhere near a delay). The sum is
+  // Re Σ c_k e^{jω_k τ} plus a constant, a trigonometric sum whose fastest
+  // term turns once over that interval: a grid of 64 points (1/64 turn)
+  // resolves its basins, Brent's method refines (numerics::minimize_1d).
+  double delay_equivalent(const std::vector<cplx>& G) const {
+    const double edge = st_.omega[static_cast<std::size_t>(st_.excited.back())];
+    const auto total = [&](double tau) {
+      const std::vector<double> r = weighted_deviation(G, tau);
+      return std::accumulate(r.begin(), r.end(), 0.0);
+    };
+    return numerics::minimize_1d(total, 0.0, kTwoPi / edge, 64).first;
+  }
+
   const Base& base_;
   const Setting& st_;
   Fft& fft_;
@@ -936,6 +987,10 @@ json effect_json(const Injected& e, const Base& base) {
       j["order"] = e.order;
       j["cutoff"] = 1.0 / (kTwoPi * s * e.time_constant0);  // cycles/sample
       if (e.order == 2) j["damping"] = e.sensor_zeta;
+      if (base.continuous) {  // the calibration's delay (gap_cases.hpp, "Strength calibration")
+        j["delay_equivalent"] = e.delay_equivalent;
+        j["ratio_undelayed"] = e.ratio_undelayed;
+      }
       break;
     case Effect::UnmodelledMode:
       j["connection"] = e.series ? "series" : "parallel";
@@ -1186,7 +1241,8 @@ void hit_targets(std::vector<Injected>& effects, const std::vector<double>& hi_o
       }
     }
     e.scale = s;
-    e.ratio = cal.deviation(e, s, &e.line_ratio) / nu;
+    e.ratio = cal.deviation(e, s, &e.line_ratio, &e.delay_equivalent) / nu;
+    if (e.effect == Effect::SensorDynamics) e.ratio_undelayed = cal.undelayed_deviation(e, s) / nu;
     for (double& r : e.line_ratio) r /= nu;
     e.lines = cal.lines(e);
   }

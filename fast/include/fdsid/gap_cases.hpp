@@ -88,7 +88,17 @@
 ///  - linear effects: ΔY(k) = (G_true(k) − G_sim(k)) U(k) at the excited lines;
 ///  - nonlinearity: ΔY(k) = Y(k) at the non-excited lines 1 … K (the distortion);
 ///  - leakage: ΔY(k) = the first period's transient, at every line 1 … K, and
-///    divided by σ²(k) (one period, not the mean of M).
+///    divided by σ²(k) (one period, not the mean of M);
+///  - the continuous family's sensor: ΔY(k) = (G_true(k) − G_sim(k) e^{−jω_k τ}) U(k)
+///    with τ ∈ [0, 2π/ω_edge] the delay that minimises the ratio (a grid of 64
+///    and Brent's method): only the part of its deviation that no delay
+///    explains. A continuous low-pass far above the band is a delay there
+///    (phase −ω/ω_c, gain 1 − O((ω/ω_c)²)), and calibrating its whole
+///    deviation put clear sensors' cut-offs at 0.6 … 5 cycles/sample, where the
+///    record cannot tell them from a delay (stop 39: 70 of 92 wrong continuous
+///    verdicts). A discrete low-pass there is a fast pole, not a delay, and is
+///    calibrated as the other linear effects. The truth's details give τ
+///    ("delay_equivalent") and the ratio without it ("ratio_undelayed").
 /// A target ratio is drawn log-uniformly from gap_ratio_range(strength); the
 /// effect's physical parameters are drawn from a per-strength range, the noise
 /// level ν is set to make that draw hit the target (for two effects: the
