@@ -10,6 +10,7 @@
 #include "common.hpp"
 
 #include <boost/math/constants/constants.hpp>
+#include <boost/math/special_functions/gamma.hpp>
 
 #include <cctype>
 #include <fstream>
@@ -144,6 +145,96 @@ GapStatistic gap_statistic(const std::vector<Real>& u, const std::vector<Real>& 
     return frequency_response(model, scale * Real(k))(0, 0);
   };
   return gap_statistic(u, y, period, periods, excited_lines, unexcited_lines, response);
+}
+
+namespace {
+
+// d_m(j) for every pair j (gap.hpp: the lines differenced in disjoint adjacent
+// pairs, then the deviations from the periods' mean), the pairs with
+// Σ_m |d_m|² = 0 left out. Throws InputError for fewer than 1 period or rows
+// of unequal length.
+std::vector<std::vector<Complex>> pair_deviations(const std::vector<std::vector<Complex>>& r) {
+  if (r.empty()) throw InputError("period tests: no periods");
+  const std::size_t R = r.size(), K = r[0].size();
+  for (const auto& row : r)
+    if (row.size() != K) throw InputError("period tests: the periods' residual rows differ in length");
+  std::vector<std::vector<Complex>> out;
+  for (std::size_t j = 0; 2 * j + 1 < K; ++j) {
+    std::vector<Complex> d(R);
+    Complex mean(Real(0), Real(0));
+    for (std::size_t m = 0; m < R; ++m) {
+      d[m] = r[m][2 * j] - r[m][2 * j + 1];
+      mean += d[m];
+    }
+    mean /= Real(static_cast<long long>(R));
+    Real total = 0;
+    for (Complex& x : d) {
+      x -= mean;
+      total += norm(x);
+    }
+    if (total > 0) out.push_back(std::move(d));
+  }
+  return out;
+}
+
+Real squared_sum(const std::vector<Complex>& d) {
+  Real total = 0;
+  for (const Complex& x : d) total += norm(x);
+  return total;
+}
+
+}  // namespace
+
+PeriodPowerStatistic period_power_statistic(const std::vector<std::vector<Complex>>& residuals) {
+  const auto d = pair_deviations(residuals);
+  const int R = static_cast<int>(residuals.size());
+  PeriodPowerStatistic out;
+  out.pairs = static_cast<int>(d.size());
+  if (R < 3 || out.pairs < 30) return out;
+  const Real Rr = Real(R), J = Real(out.pairs);
+  std::vector<Real> Q(static_cast<std::size_t>(R), Real(0));
+  Real v = 0;
+  for (const auto& dj : d) {
+    const Real total = squared_sum(dj);
+    for (int m = 0; m < R; ++m) {
+      const Real q = norm(dj[static_cast<std::size_t>(m)]) / total;
+      Q[static_cast<std::size_t>(m)] += q;
+      v += (q - 1 / Rr) * (q - 1 / Rr);
+    }
+  }
+  out.v = v / (J * Rr);
+  if (!(out.v > 0)) return out;
+  Real spread = 0;
+  for (Real& x : Q) {
+    x /= J;
+    spread += (x - 1 / Rr) * (x - 1 / Rr);
+    out.relative.push_back(Rr * x);
+  }
+  out.S = J * (Rr - 1) / (out.v * Rr) * spread;
+  out.p = boost::math::gamma_q((Rr - 1) / 2, out.S / 2);
+  out.tested = true;
+  return out;
+}
+
+PeriodCorrelation period_lag_correlation(const std::vector<std::vector<Complex>>& residuals) {
+  const auto d = pair_deviations(residuals);
+  const std::size_t R = residuals.size();
+  PeriodCorrelation out;
+  out.pairs = static_cast<int>(d.size());
+  if (R < 4 || out.pairs < 30) return out;
+  std::vector<Real> c;
+  for (const auto& dj : d) {
+    Real lag = 0;
+    for (std::size_t m = 0; m < R; ++m) lag += real(dj[m] * conj(dj[(m + 1) % R]));
+    c.push_back(lag / squared_sum(dj));
+  }
+  const Real J = Real(out.pairs);
+  for (const Real& x : c) out.mean += x;
+  out.mean /= J;
+  for (const Real& x : c) out.variance += (x - out.mean) * (x - out.mean);  // two-pass
+  out.variance /= J - 1;
+  out.tested = true;
+  return out;
 }
 
 }  // namespace fdsid::reference

@@ -20,6 +20,7 @@
 
 #include <boost/math/constants/constants.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
+#include <boost/math/special_functions/erf.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -434,6 +435,47 @@ TEST(GapReference, ReadRecordsCsv) {
   }
   std::remove(path.c_str());
   EXPECT_THROW(read_records_csv(path), InputError);  // missing file
+}
+
+// The period tests by hand (gap.hpp): R = 4 periods, J = 30 line pairs, every
+// pair with r(2j) = (3, 0, 0, 0) over the periods and r(2j+1) = 0, so
+// e = (3, 0, 0, 0), ē = 3/4, d = (9/4, −3/4, −3/4, −3/4), Σ|d|² = 27/4:
+//   q = (3/4, 1/12, 1/12, 1/12) in every pair, Q = q, relative = 4q = (3, 1/3, 1/3, 1/3);
+//   v = (1/4) Σ (q − 1/4)² = (1/4)(1/4 + 3/36) = 1/12;
+//   S = J (R − 1)/(v R) Σ (Q − 1/4)² = 30 · 3 · 12/4 · (1/3) = 90;
+//   p = Q(3/2, 45) = P[χ²₃ > 90];
+//   c = (d₀d₁ + d₁d₂ + d₂d₃ + d₃d₀)/Σ|d|² = (−27 + 9 + 9 − 27)/16 / (27/4) = −1/3
+// in every pair (mean −1/3 = −1/(R − 1), variance 0). Rows of a line pair
+// whose differences are all equal (d = 0) are left out: 5 such pairs added
+// change nothing.
+TEST(GapReference, PeriodTestsByHand) {
+  std::vector<std::vector<Complex>> r(4, std::vector<Complex>(70, Complex(Real(0), Real(0))));
+  for (int j = 0; j < 30; ++j) r[0][static_cast<std::size_t>(2 * j)] = Complex(Real(3), Real(0));
+  for (int j = 30; j < 35; ++j)
+    for (auto& row : r) row[static_cast<std::size_t>(2 * j)] = Complex(Real(2), Real(-1));  // d = 0: left out
+  const PeriodPowerStatistic pw = period_power_statistic(r);
+  ASSERT_TRUE(pw.tested);
+  EXPECT_EQ(pw.pairs, 30);
+  EXPECT_LT(rel(pw.v, Real(1) / 12), tol);
+  EXPECT_LT(rel(pw.S, Real(90)), tol);
+  // P[χ²₃ > x] = erfc(√(x/2)) + √(2x/π) e^{−x/2} (the χ² survival function for 3 degrees of freedom)
+  const Real x(90);
+  EXPECT_LT(rel(pw.p, boost::math::erfc(sqrt(x / 2)) + sqrt(2 * x / pi) * exp(-x / 2)), tol);
+  ASSERT_EQ(pw.relative.size(), 4u);
+  EXPECT_LT(rel(pw.relative[0], Real(3)), tol);
+  for (int m = 1; m < 4; ++m) EXPECT_LT(rel(pw.relative[static_cast<std::size_t>(m)], Real(1) / 3), tol);
+  const PeriodCorrelation pc = period_lag_correlation(r);
+  ASSERT_TRUE(pc.tested);
+  EXPECT_LT(rel(pc.mean, Real(-1) / 3), tol);
+  EXPECT_LT(abs(pc.variance), tol);
+  // Too few pairs or periods: not tested.
+  r.resize(3);
+  EXPECT_FALSE(period_lag_correlation(r).tested);  // R = 3: c ≡ −1/2
+  for (auto& row : r) row.resize(58);              // 29 pairs
+  EXPECT_FALSE(period_power_statistic(r).tested);
+  r[1].pop_back();
+  EXPECT_THROW(period_power_statistic(r), InputError);  // rows of unequal length
+  EXPECT_THROW(period_lag_correlation({}), InputError);  // no periods
 }
 
 }  // namespace

@@ -2,7 +2,7 @@
 // (shared/CONTRACTS.md): how far a model's response is from periodic
 // input/output records, measured in units of the record's own noise.
 //
-// This is the oracle for the double-precision gap statistic in fast/; it shares
+// This is the oracle for the double-precision gap statistic and period tests in fast/; it shares
 // only the scalar and Model types with the rest of the reference and no code at
 // all with fast/. The per-period DFTs are the direct sums of Pintelon (2002)
 // Eq. (4) in 50-digit arithmetic (u ≈ 1e-50): no FFT, slow is fine.
@@ -91,5 +91,53 @@ GapStatistic gap_statistic(const std::vector<Real>& u, const std::vector<Real>& 
 /// Survival function of F(2, 2M−2): P[F > t] = (1 + t/(M−1))^{−(M−1)} (derived
 /// above). Throws InputError for M < 2 or t < 0.
 Real gap_p_value(const Real& t, int M);
+
+// ---------------------------------------------------------------------------
+// The period tests of `fdsid gap` (issue 17: real noise is not stationary),
+// on the residual spectra r_m(k) = Y_m(k) − G(k) U_m(k) of R periods
+// (residuals[m], m = 0 … R−1) at K consecutive DFT lines (residuals[m][i]:
+// line k₀ + i). Both tests difference the lines in disjoint adjacent pairs,
+//   e_m(j) = r_m(2j) − r_m(2j + 1),  j = 0 … J − 1,  J = ⌊K/2⌋
+// (the leakage term of one period's DFT of coloured noise is smooth in k and
+// cancels to first order), and take the deviations from the periods' mean,
+//   d_m(j) = e_m(j) − (1/R) Σ_{m'} e_{m'}(j);
+// a pair with Σ_m |d_m(j)|² = 0 (no noise there) is left out; J' counts the
+// pairs used.
+
+/// Equal noise power in every period. Per pair the shares
+/// q_m(j) = |d_m(j)|² / Σ_{m'} |d_{m'}(j)|² (which a periodic model error, the
+/// line's noise level and a common scale leave alone); Q_m = (1/J') Σ_j q_m(j);
+/// v = (1/(J' R)) Σ_j Σ_m (q_m(j) − 1/R)²;
+///   S = J' (R − 1) / (v R) · Σ_m (Q_m − 1/R)²,
+/// p = P[χ²_{R−1} > S] = Q((R − 1)/2, S/2) (the regularised upper incomplete
+/// gamma function); relative_m = R Q_m. With independent noise of equal power
+/// the q_m(j) are exchangeable with Σ_m q_m = 1, so E q_m = 1/R and
+/// Cov q = v R/(R − 1) (I − 11ᵀ/R) (v = Var q_m); the mean over J' independent
+/// pairs is normal for large J' and S, the quadratic form in the
+/// pseudo-inverse of that covariance, is χ²_{R−1}. tested = R ≥ 3, J' ≥ 30
+/// and v > 0; otherwise p = 1 and relative is empty.
+struct PeriodPowerStatistic {
+  bool tested = false;
+  int pairs = 0;                ///< J'
+  Real S = 0, p = 1, v = 0;
+  std::vector<Real> relative;   ///< R Q_m
+};
+PeriodPowerStatistic period_power_statistic(const std::vector<std::vector<Complex>>& residuals);
+
+/// Independent noise from period to period: per pair the circular lag-one
+/// correlation c(j) = Σ_m Re(d_m d̄_{(m+1) mod R}) / Σ_m |d_m|², its mean c̄
+/// over the J' pairs and their sample variance (divisor J' − 1). For
+/// independent periods of equal power E c = −1/(R − 1) exactly: d is then
+/// isotropic in the (R − 1)-dimensional subspace Σ_m d_m = 0 and its direction
+/// independent of its norm, so E c = tr(B Π)/(R − 1), B = (L + Lᵀ)/2 the
+/// symmetrised circular shift (zero diagonal, rows summing to 1) and
+/// Π = I − 11ᵀ/R: tr(B Π) = tr B − 1ᵀB1/R = −1. tested = R ≥ 4
+/// and J' ≥ 30 (with R = 3, c ≡ −1/2).
+struct PeriodCorrelation {
+  bool tested = false;
+  int pairs = 0;  ///< J'
+  Real mean = 0, variance = 0;
+};
+PeriodCorrelation period_lag_correlation(const std::vector<std::vector<Complex>>& residuals);
 
 }  // namespace fdsid::reference
