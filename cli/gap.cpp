@@ -168,6 +168,17 @@ void print_report(Out& out, const GapReport& r, int periods) {
     }
     out << "\n";
   }
+  if (!r.possible_additions.empty()) {
+    const std::string e = fdsid::to_string(r.path.front().added);
+    out << "possibly also here:";
+    const char* sep = " ";
+    for (const auto& [g, p] : r.possible_additions) {
+      out << sep << fdsid::to_string(g) << " beside " << e << " explains the record as well (added: p " << p_text(p)
+          << ")";
+      sep = "; ";
+    }
+    out << "\n";
+  }
   if (!r.bands.empty()) {
     out << "bands (Hz):";
     for (const auto& b : r.bands) out << " " << band_text(b);

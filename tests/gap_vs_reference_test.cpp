@@ -53,9 +53,13 @@ Case make(const StateSpace& truth, std::uint64_t seed) {
 
 // Tolerance on t(k): t = M|Ē|²/s², so δt/t ≤ 2 δĒ/|Ē| + δs²/s². Ē and the
 // deviations E_l − Ē are sums of O(log2 P) rounded DFT terms and one product
-// G U, each off by at most c u (|Y_l| + |G U_l|) with c = 4 (log2 P + n + 4)
-// (FFT depth, the LU solve of order n for G, the subtraction); hence
-// δt/t ≤ c u S (2/|Ē| + 2/s), S = max_l (|Y_l| + |G U_l|), s = √s².
+// G U, each off by at most c u S with c = 4 (log2 P + n + 4) (FFT depth, the
+// LU solve of order n for G, the subtraction) and S the size of the period's
+// data: an FFT's rounding error is bounded norm-wise, |δY_l(k)| ≤ ‖δY_l‖₂ ≤
+// c u ‖y_l‖₂ (unitary DFT), so S = (1 + max|G|) max_l ‖x_l‖₂ ≤ 10 √P max|x|
+// (|G| ≤ 9 on these plants); hence δt/t ≤ c u S (2/|Ē| + 2/s), s = √s².
+// Measured: the worst line at 6e-5 of this bound — the norm-wise FFT bound
+// against a typical per-line error ≈ u √(log2 P) ‖x‖/√P, and c against ≈ 1.
 // The reference is exact to 1e-45 in comparison.
 double t_tolerance(const reference::LineStatistics& ref, std::size_t i, const Case& c, int n) {
   const double E = std::abs(ref.mean_residual[i]).convert_to<double>();

@@ -1507,10 +1507,12 @@ class ForwardSelection {
   // The stages taken, from the model as given (stage 0) to the chosen set;
   // `best_single`: of the effects admitted alone (stage 1), the one leaving
   // the least gap.
-  // `alternatives`: see GapReport::alternatives, for the stage-1 linear
-  // effect, from the fits the selection made anyway (each effect alone at
-  // stage 1, each added to it at stage 2).
-  std::vector<Stage> run(std::optional<Stage>& best_single, std::vector<std::pair<Effect, double>>& alternatives) const {
+  // `alternatives`, `additions`: see GapReport::alternatives and
+  // ::possible_additions, for the stage-1 linear effect, from the fits the
+  // selection made anyway (each effect alone at stage 1, each added to it at
+  // stage 2).
+  std::vector<Stage> run(std::optional<Stage>& best_single, std::vector<std::pair<Effect, double>>& alternatives,
+                         std::vector<std::pair<Effect, double>>& additions) const {
     std::vector<Stage> path{evaluate(Stage{})};
     std::array<std::optional<Stage>, kAllEffects.size()> alone;
     for (int stage = 0; stage < 4; ++stage) {
@@ -1526,8 +1528,10 @@ class ForwardSelection {
       std::array<std::optional<Stage>, kAllEffects.size()> tried;
       on_two_workers(tried.size(), [&](size_t i) { tried[i] = admit(cur, kAllEffects[i]); });
       if (stage == 0) alone = tried;
-      if (stage == 1 && cur.linear.size() == 1 && cur.first == 0 && !cur.nonlinear)
+      if (stage == 1 && cur.linear.size() == 1 && cur.first == 0 && !cur.nonlinear) {
         alternatives = equivalents(cur.linear[0], alone, tried);
+        additions = possible_additions(cur, tried);
+      }
       for (size_t i = 0; i < kAllEffects.size(); ++i) {
         const Effect e = kAllEffects[i];
         std::optional<Stage> next = std::move(tried[i]);
@@ -1613,6 +1617,24 @@ class ForwardSelection {
       const Stage& pair = *pairs[i];
       const double p = dg_.f_test(alone[i]->V, pair.V, std::max(1, pair.q - alone[i]->q), pair.q);
       if (p >= o_.effect_alpha) out.emplace_back(g, p);
+    }
+    return out;
+  }
+
+  // The linear effects g whose joint fit beside the one linear effect of
+  // `cur` (stage 1) explains the record as well as it alone: Schwarz
+  // criterion within 1 of cur's (2 ln B ≤ 2, as equivalents), g not admitted
+  // (its F-test or the relevance rule said no). With the F-test's p-value.
+  std::vector<std::pair<Effect, double>> possible_additions(
+      const Stage& cur, const std::array<std::optional<Stage>, kAllEffects.size()>& pairs) const {
+    std::vector<std::pair<Effect, double>> out;
+    const double K = static_cast<double>(s_.exc.size());
+    for (size_t i = 0; i < kAllEffects.size(); ++i) {
+      const Effect g = kAllEffects[i];
+      if (!is_linear(g) || !pairs[i] || pairs[i]->admitted) continue;
+      if ((score(*pairs[i]) - score(cur)) * K > 1) continue;
+      for (const EffectFit& f : pairs[i]->fits)
+        if (f.effect() == g) out.emplace_back(g, f.p_value);
     }
     return out;
   }
@@ -1750,8 +1772,8 @@ Augment choose_effects(const Diagnosis& dg, const Spectra& s, const Augment& a0,
                        GapReport& rep) {
   const ForwardSelection sel(dg, s, a0, drop, options);
   std::optional<Stage> best_single;
-  std::vector<std::pair<Effect, double>> alternatives;
-  std::vector<Stage> path = sel.run(best_single, alternatives);
+  std::vector<std::pair<Effect, double>> alternatives, additions;
+  std::vector<Stage> path = sel.run(best_single, alternatives, additions);
   if (best_single && best_single->gap < path.back().gap - sel.floor()) {
     rep.notes.push_back("the forward selection left gap " +
                         sci(path.back().gap, 4) + ", more than " + std::string(to_string(best_single->fits[0].effect())) +
@@ -1784,8 +1806,10 @@ Augment choose_effects(const Diagnosis& dg, const Spectra& s, const Augment& a0,
   rep.chosen = path.back().fits;
   // Alternatives only when the final set's one linear effect is stage 1's.
   const Stage& last = path.back();
-  if (path.size() >= 2 && last.linear.size() == 1 && path[1].linear.size() == 1 && path[1].linear[0] == last.linear[0])
+  if (path.size() >= 2 && last.linear.size() == 1 && path[1].linear.size() == 1 && path[1].linear[0] == last.linear[0]) {
     rep.alternatives = alternatives;
+    rep.possible_additions = additions;
+  }
   return path.back().state;
 }
 
@@ -1995,6 +2019,9 @@ nlohmann::json gap_report_to_json(const GapReport& r) {
   }
   j["alternatives"] = nlohmann::json::array();
   for (const auto& [e, p] : r.alternatives) j["alternatives"].push_back({{"effect", to_string(e)}, {"p_value", p}});
+  j["possible_additions"] = nlohmann::json::array();
+  for (const auto& [e, p] : r.possible_additions)
+    j["possible_additions"].push_back({{"effect", to_string(e)}, {"p_value", p}});
   j["candidates"] = nlohmann::json::array();
   for (const EffectFit& f : r.candidates) j["candidates"].push_back(fit_json(f));
   j["chosen"] = nlohmann::json::array();

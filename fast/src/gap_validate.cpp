@@ -97,6 +97,12 @@ GapValidationCase run_case(const GapValidationOptions& o, int i, const std::file
         if (is_linear(e)) e = alt.first;
       r.correct_up_to_alternatives = r.correct_up_to_alternatives || joined(swapped) == r.truth;
     }
+    r.named_alternatives = static_cast<int>(rep.alternatives.size() + rep.possible_additions.size());
+    for (const auto& add : rep.possible_additions) {  // an effect the report says may be there too
+      std::vector<Effect> with = rep.present;
+      with.push_back(add.first);
+      r.correct_up_to_alternatives = r.correct_up_to_alternatives || joined(with) == r.truth;
+    }
     r.gap_before = rep.gap_before;
     r.gap_after = rep.gap_after;
     r.p_period_power = rep.p_period_power;
@@ -269,6 +275,7 @@ nlohmann::json gap_validation_to_json(const GapValidation& v) {
                           {"truth", r.truth},         {"verdict", r.verdict},     {"correct", r.correct},
                           {"gap_before", r.gap_before}, {"gap_after", r.gap_after}, {"truth_bands", r.truth_bands},
                           {"bands_hit", r.bands_hit}, {"correct_up_to_alternatives", r.correct_up_to_alternatives},
+                          {"named_alternatives", r.named_alternatives},
                           {"p_period_power", r.p_period_power}, {"p_period_independence", r.p_period_independence}};
     if (!r.error.empty()) row["error"] = r.error;
     j["rows"].push_back(row);

@@ -237,6 +237,13 @@ struct GapReport {
   /// (a delay and a high-cut-off low-pass, say). With the p-value of adding
   /// e to g.
   std::vector<std::pair<Effect, double>> alternatives;
+  /// When one linear effect e is present: the linear effects g that, fitted
+  /// jointly beside e, explain the record as well as e alone — the pair's
+  /// Schwarz criterion within 1 of e's (2 ln B ≤ 2) — though adding g was not
+  /// admitted: the record cannot tell whether g is there too (a delay beside
+  /// a first-order low-pass is close to one overdamped second-order
+  /// low-pass). With the p-value of adding g to e.
+  std::vector<std::pair<Effect, double>> possible_additions;
   int periods_used = 0;                            ///< M after dropping transient periods
   int excited = 0, unexcited = 0;                  ///< lines in each test
   double p_gap = 1, p_nonlinearity = 1, p_leakage = 1;  ///< detection tests on the model as given

@@ -57,8 +57,11 @@ struct GapValidationCase {
   bool correct = false;
   /// correct, or the verdict with its one linear effect replaced by one of the
   /// report's alternatives (GapReport::alternatives: indistinguishable on
-  /// the record) is the truth
+  /// the record) or with one of its possible additions
+  /// (GapReport::possible_additions) added is the truth
   bool correct_up_to_alternatives = false;
+  /// What the report named beside its verdict: alternatives + possible additions
+  int named_alternatives = 0;
   double gap_before = 0, gap_after = 0;
   int truth_bands = 0, bands_hit = 0;  ///< truth bands overlapped by a reported band
   /// The report's equal-noise-power-per-period test (GapReport::p_period_power)
