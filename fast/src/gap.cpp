@@ -1623,8 +1623,9 @@ class ForwardSelection {
 
   // The linear effects g whose joint fit beside the one linear effect of
   // `cur` (stage 1) explains the record as well as it alone: Schwarz
-  // criterion within 1 of cur's (2 ln B ≤ 2, as equivalents), g not admitted
-  // (its F-test or the relevance rule said no). With the F-test's p-value.
+  // criterion within 1 of cur's (2 ln B ≤ 2, as equivalents) and g's F-test
+  // not significant at effect_alpha (the record does not demand g; one that
+  // does but fails the relevance rule is no "as well"). With that p-value.
   std::vector<std::pair<Effect, double>> possible_additions(
       const Stage& cur, const std::array<std::optional<Stage>, kAllEffects.size()>& pairs) const {
     std::vector<std::pair<Effect, double>> out;
@@ -1634,7 +1635,7 @@ class ForwardSelection {
       if (!is_linear(g) || !pairs[i] || pairs[i]->admitted) continue;
       if ((score(*pairs[i]) - score(cur)) * K > 1) continue;
       for (const EffectFit& f : pairs[i]->fits)
-        if (f.effect() == g) out.emplace_back(g, f.p_value);
+        if (f.effect() == g && f.p_value >= o_.effect_alpha) out.emplace_back(g, f.p_value);
     }
     return out;
   }
@@ -1848,6 +1849,10 @@ void conclude(const Spectra& s, const LineStats& st0, const Augment& cur, const 
     rep.verdict = rep.p_gap < options.alpha ? GapVerdict::Unexplained : GapVerdict::NoGap;
   else
     rep.verdict = rep.p_after < options.alpha ? GapVerdict::Unexplained : GapVerdict::Explained;
+  // A possible addition says the explained record cannot tell whether it is
+  // there too; where the effects found leave a gap, nothing explains it "as
+  // well", and the misfit, not the noise, sets the Schwarz criterion.
+  if (rep.verdict != GapVerdict::Explained) rep.possible_additions.clear();
   const Eigen::Index K = static_cast<Eigen::Index>(s.exc.size());
   rep.frequency.resize(K);
   for (Eigen::Index i = 0; i < K; ++i) rep.frequency(i) = s.hz(s.exc[i]);

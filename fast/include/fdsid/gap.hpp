@@ -239,10 +239,11 @@ struct GapReport {
   std::vector<std::pair<Effect, double>> alternatives;
   /// When one linear effect e is present: the linear effects g that, fitted
   /// jointly beside e, explain the record as well as e alone — the pair's
-  /// Schwarz criterion within 1 of e's (2 ln B ≤ 2) — though adding g was not
-  /// admitted: the record cannot tell whether g is there too (a delay beside
-  /// a first-order low-pass is close to one overdamped second-order
-  /// low-pass). With the p-value of adding g to e.
+  /// Schwarz criterion within 1 of e's (2 ln B ≤ 2) — and adding g is not
+  /// significant (F-test at effect_alpha): the record cannot tell whether g is
+  /// there too (a delay beside a low-pass is close to a low-pass of another
+  /// shape). With the p-value of adding g to e. Only with the verdict
+  /// "explained": where a gap remains nothing explains the record as well.
   std::vector<std::pair<Effect, double>> possible_additions;
   int periods_used = 0;                            ///< M after dropping transient periods
   int excited = 0, unexcited = 0;                  ///< lines in each test
