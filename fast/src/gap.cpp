@@ -619,23 +619,24 @@ class Diagnosis {
     // together are one sensor of the other form (measured: 7 of 60 clear
     // delay + sensor_dynamics pairs, gap-validate classic seeds 1-3, named
     // sensor_dynamics alone with gap ≈ 1).
+    //
+    // Cut-offs from below the band up to f_c = ln(1000)/(2π) ≈ 1.1
+    // cycles/sample: for the discrete forms a pole radius e^{−2π f_c} down to
+    // 1e-3 — a discrete section with a fast pole (1−a)/(1−a q), a = 0.005, is
+    // still a low-pass, its gain falling by 2a/(1+a) towards Nyquist, which a
+    // delay is not (measured: such sensors were named delay when the range
+    // stopped at 0.45) — the second-order pair's angle 2π f_c √(1−ζ²) below
+    // π; for the continuous forms the same range: a continuous sensor has
+    // its cut-off wherever its physics puts it, and above Nyquist 1/(1 + x)
+    // still loses gain across the band, 1 − x²/2, which a delay does not
+    // (measured: gap-validate --continuous, classic seed 1, 3 of 40 cases —
+    // first-order sensors at 0.8 … 1.6 cycles/sample — named delay while the
+    // range stopped at 0.5).
+    const double fc_max = std::log(1000.0) / (2 * M_PI);
+    const double lo = std::log(0.3 * fmin), hi = std::log(std::min(fc_max, 30 * fmax));
     const int first_form = model_.domain == Domain::Discrete ? 0 : 1;
     for (int form = first_form; form < 4; form += 2) {
       const bool second = form >= 2;
-      // Cut-offs from below the band up to f_c = ln(1000)/(2π) ≈ 1.1
-      // cycles/sample: for the discrete forms a pole radius e^{−2π f_c} down to
-      // 1e-3 — a discrete section with a fast pole (1−a)/(1−a q), a = 0.005, is
-      // still a low-pass, its gain falling by 2a/(1+a) towards Nyquist, which a
-      // delay is not (measured: such sensors were named delay when the range
-      // stopped at 0.45) — the second-order pair's angle 2π f_c √(1−ζ²) below
-      // π; for the continuous forms the same range: a continuous sensor has
-      // its cut-off wherever its physics puts it, and above Nyquist 1/(1 + x)
-      // still loses gain across the band, 1 − x²/2, which a delay does not
-      // (measured: gap-validate --continuous, classic seed 1, 3 of 40 cases —
-      // first-order sensors at 0.8 … 1.6 cycles/sample — named delay while the
-      // range stopped at 0.5).
-      const double fc_max = std::log(1000.0) / (2 * M_PI);
-      const double lo = std::log(0.3 * fmin), hi = std::log(std::min(fc_max, 30 * fmax));
       auto V = [&](double lfc, double zeta) {
         if (!(lfc >= lo && lfc <= hi && zeta > 0.05 && zeta < (form == 2 ? 0.999 : 5.0)))
           return std::numeric_limits<double>::infinity();
