@@ -727,7 +727,8 @@ class Calibrator {
     return G;
   }
 
-  // Per excited line, |(G(k) − G_sim(k) e^{−jω_k τ}) U(k)|² M / σ²(k)/ν.
+  // Per excited line, |(G(k) − G_sim(k) e^{−jω_k τ}) U(k)|² M / w(k), w = σ²/ν
+  // the noise shape: ν times the line's ratio.
   std::vector<double> weighted_deviation(const std::vector<cplx>& G, double tau) const {
     std::vector<double> r;
     for (std::size_t j = 0; j < G.size(); ++j) {
