@@ -149,6 +149,12 @@ GapStatistic gap_statistic(const std::vector<Real>& u, const std::vector<Real>& 
 
 namespace {
 
+Real squared_sum(const std::vector<Complex>& d) {
+  Real total = 0;
+  for (const Complex& x : d) total += norm(x);
+  return total;
+}
+
 // d_m(j) for every pair j (gap.hpp: the lines differenced in disjoint adjacent
 // pairs, then the deviations from the periods' mean), the pairs with
 // Σ_m |d_m|² = 0 left out. Throws InputError for fewer than 1 period or rows
@@ -167,20 +173,10 @@ std::vector<std::vector<Complex>> pair_deviations(const std::vector<std::vector<
       mean += d[m];
     }
     mean /= Real(static_cast<long long>(R));
-    Real total = 0;
-    for (Complex& x : d) {
-      x -= mean;
-      total += norm(x);
-    }
-    if (total > 0) out.push_back(std::move(d));
+    for (Complex& x : d) x -= mean;
+    if (squared_sum(d) > 0) out.push_back(std::move(d));
   }
   return out;
-}
-
-Real squared_sum(const std::vector<Complex>& d) {
-  Real total = 0;
-  for (const Complex& x : d) total += norm(x);
-  return total;
 }
 
 }  // namespace
