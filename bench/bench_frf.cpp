@@ -165,6 +165,9 @@ BENCHMARK(BM_Figure1Runs)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRea
 
 BENCHMARK(BM_IdentifyFrf)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
 BENCHMARK(BM_Step1)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
+// A middle size where step 1's QR splits into blocks of less than one chunk
+// (numerics/qr.cpp: F = 5000, r = 40 gives seven blocks of 714 frequencies).
+BENCHMARK(BM_Step1)->Args({5000, 40})->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
 BENCHMARK(BM_PlainQR)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
 
 }  // namespace

@@ -29,7 +29,10 @@ double* work_buffer(std::vector<double>& local, std::size_t size) {
 }
 
 Eigen::MatrixXd qr_range(int g0, int g1, int rows_per_group, int cols, const ChunkFill& fill, int rows_per_chunk) {
-  const int chunk = std::max(1, rows_per_chunk / rows_per_group);
+  // A block of fewer groups than one chunk gets a work matrix of its own size
+  // (at F = 5000, r = 40: seven blocks of 714 groups, each factored in a
+  // 2128 × 80 work matrix where 1508 × 80 hold it).
+  const int chunk = std::max(1, std::min(rows_per_chunk / rows_per_group, g1 - g0));
   const Eigen::Index rows = cols + static_cast<Eigen::Index>(chunk) * rows_per_group;
   std::vector<double> local;
   Eigen::Map<Eigen::MatrixXd> work(work_buffer(local, static_cast<std::size_t>(rows) * cols), rows, cols);
