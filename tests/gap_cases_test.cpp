@@ -593,11 +593,15 @@ TEST(GapCases, NamesAndErrors) {
 }
 
 // Measured noise (gap_cases.hpp, "Measured noise"; issue 17 item 5). A
-// "measured" column of 12 periods: a periodic response plus an AR(1) noise
+// "measured" column of 12 periods: a periodic response whose amplitude
+// drifts linearly from period to period (5 % per period) plus an AR(1) noise
 // whose power steps by period (as the F-16's varies 30-50 %). The pool holds
-// its 6 period-pair differences / √2 — the periodic part cancels, so each
-// equals the noise alone to rounding (1e-12 of the noise's scale: one
-// subtraction of values ~10× the noise). A case with that pool injects M of
+// the two contrasts of each group of four periods (quadratic, cubic; 6 in
+// all) — the response and its linear drift cancel, so each equals the same
+// contrast of the noise alone to rounding (1e-12 of 10× the noise's scale:
+// four terms of size ≲ 6× the noise's, coefficients ≤ 1). The pool of a
+// column of 7 periods: 2 from the first four, 1 from the three left. A case
+// with that pool injects M of
 // them, distinct, times the truth's factor, onto the same noise-free record
 // the case without measured noise has (the same draws; an effect-free case's
 // ν does not depend on the noise shape); the input column is unchanged but
@@ -608,22 +612,38 @@ TEST(GapCases, MeasuredNoiseIsThePoolsPeriodsScaled) {
   std::normal_distribution<double> normal;
   Eigen::VectorXd periodic(P), noise(P * periods);
   for (int t = 0; t < P; ++t) periodic(t) = 10 * std::sin(2 * M_PI * 3 * t / P) + 5 * normal(g);
+  const auto drift = [P](int t) { return 1 + 0.05 * (t / P); };  // the response's amplitude in period t / P
   double state = 0;
   for (int t = 0; t < P * periods; ++t) {
     state = 0.8 * state + normal(g);
     noise(t) = (1 + 0.25 * (t / P % 3)) * state;
   }
   Eigen::VectorXd column(P * periods);
-  for (int t = 0; t < P * periods; ++t) column(t) = periodic(t % P) + noise(t);
+  for (int t = 0; t < P * periods; ++t) column(t) = drift(t) * periodic(t % P) + noise(t);
   auto pool = std::make_shared<MeasuredNoise>();
   pool->period = P;
   add_measured_noise(*pool, column, "synthetic column");
   ASSERT_EQ(pool->periods.size(), 6u);
   const double scale = noise.cwiseAbs().maxCoeff();
+  // The contrasts written out (gap_cases.hpp), applied to the noise of periods m … m+3.
+  const auto contrast = [&](int m, int which, int t) {
+    const auto y = [&](int j) { return noise((m + j) * P + t); };
+    if (which == 0) return (y(0) - y(1) - y(2) + y(3)) / 2;
+    if (which == 1) return (-y(0) + 3 * y(1) - 3 * y(2) + y(3)) / std::sqrt(20.0);
+    return (y(0) - 2 * y(1) + y(2)) / std::sqrt(6.0);
+  };
   for (int i = 0; i < 6; ++i)
     for (int t = 0; t < P; ++t)
-      ASSERT_NEAR(pool->periods[static_cast<std::size_t>(i)][static_cast<std::size_t>(t)],
-                  (noise(2 * i * P + t) - noise((2 * i + 1) * P + t)) / std::sqrt(2.0), 1e-12 * 10 * scale);
+      ASSERT_NEAR(pool->periods[static_cast<std::size_t>(i)][static_cast<std::size_t>(t)], contrast(4 * (i / 2), i % 2, t),
+                  1e-12 * 10 * scale);
+  MeasuredNoise seven;
+  seven.period = P;
+  add_measured_noise(seven, column.head(7 * P), "seven periods");
+  ASSERT_EQ(seven.periods.size(), 3u);
+  for (int t = 0; t < P; ++t) {
+    ASSERT_NEAR(seven.periods[1][static_cast<std::size_t>(t)], contrast(0, 1, t), 1e-12 * 10 * scale);
+    ASSERT_NEAR(seven.periods[2][static_cast<std::size_t>(t)], contrast(4, 2, t), 1e-12 * 10 * scale);
+  }
 
   for (const auto& effects : {std::vector<Effect>{}, std::vector<Effect>{Effect::Delay}}) {
     GapCaseOptions o;
@@ -673,7 +693,7 @@ TEST(GapCases, MeasuredNoiseIsThePoolsPeriodsScaled) {
   MeasuredNoise odd;
   odd.period = P;
   EXPECT_THROW(add_measured_noise(odd, column.head(P * 3 + 1), "ragged"), Error);
-  EXPECT_THROW(add_measured_noise(odd, column.head(P), "one period"), Error);
+  EXPECT_THROW(add_measured_noise(odd, column.head(2 * P), "two periods"), Error);
 }
 
 // Speed lives in bench/bench_gap.cpp (the brief: no timed unit tests).

@@ -1054,7 +1054,7 @@ void validate_options(const GapCaseOptions& o) {
            ": use the noise record's period");
     if (static_cast<std::size_t>(o.periods) > mn.periods.size())
       fail("the measured noise holds " + std::to_string(mn.periods.size()) +
-           " noise periods (two measured periods each), the case needs " + std::to_string(o.periods) +
+           " noise periods, the case needs " + std::to_string(o.periods) +
            ": use fewer periods or add noise records");
   }
 }
@@ -1431,17 +1431,28 @@ void write_truth(const GapCaseOptions& o, const Base& base, const Setting& st, c
 
 void add_measured_noise(MeasuredNoise& pool, const Eigen::VectorXd& column, const std::string& source) {
   const Eigen::Index P = pool.period;
-  if (P < 2 || column.size() % P != 0 || column.size() / P < 2)
+  if (P < 2 || column.size() % P != 0 || column.size() / P < 3)
     throw Error(ErrorKind::Input, source,
-                "a measured noise record needs at least 2 whole periods of " + std::to_string(P) + " samples, got " +
+                "a measured noise record needs at least 3 whole periods of " + std::to_string(P) + " samples, got " +
                     std::to_string(column.size()) + " samples");
   if (!column.allFinite()) throw Error(ErrorKind::Input, source, "the noise column holds a value that is not finite");
-  const double r = std::sqrt(0.5);
-  for (Eigen::Index m = 0; m + 1 < column.size() / P; m += 2) {
-    std::vector<double> n(static_cast<std::size_t>(P));
-    for (Eigen::Index t = 0; t < P; ++t)
-      n[static_cast<std::size_t>(t)] = r * (column(m * P + t) - column((m + 1) * P + t));
-    pool.periods.push_back(std::move(n));
+  // The orthonormal contrasts of gap_cases.hpp (MeasuredNoise): per four
+  // consecutive periods the quadratic and cubic orthogonal polynomials, per
+  // three left over the quadratic.
+  static const std::vector<std::vector<double>> four = {{0.5, -0.5, -0.5, 0.5},
+                                                        {-1 / std::sqrt(20.0), 3 / std::sqrt(20.0),
+                                                         -3 / std::sqrt(20.0), 1 / std::sqrt(20.0)}};
+  static const std::vector<std::vector<double>> three = {{1 / std::sqrt(6.0), -2 / std::sqrt(6.0), 1 / std::sqrt(6.0)}};
+  const Eigen::Index R = column.size() / P;
+  for (Eigen::Index m = 0; m + 2 < R;) {
+    const auto& contrasts = m + 4 <= R ? four : three;
+    for (const auto& c : contrasts) {
+      std::vector<double> n(static_cast<std::size_t>(P), 0.0);
+      for (std::size_t i = 0; i < c.size(); ++i)
+        for (Eigen::Index t = 0; t < P; ++t) n[static_cast<std::size_t>(t)] += c[i] * column((m + static_cast<Eigen::Index>(i)) * P + t);
+      pool.periods.push_back(std::move(n));
+    }
+    m += static_cast<Eigen::Index>(contrasts.front().size());
   }
   pool.sources.push_back(source);
 }
