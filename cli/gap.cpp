@@ -68,8 +68,8 @@ void read_noise_pool(GapValidateCommand& c) {
   if (o.periods > held)
     throw Error(ErrorKind::Input, "--periods",
                 "the noise records hold " + std::to_string(held) +
-                    " noise periods (two per four measured periods, one per three left over): give --periods <= " + std::to_string(held) +
-                    " or more --noise-from records");
+                    " noise periods (two per four measured periods, one per three left over): give --periods <= " +
+                    std::to_string(held) + " or more --noise-from records");
   if (o.periods < 4)
     throw Error(ErrorKind::Input, "--noise-from",
                 "the noise records hold " + std::to_string(held) + " noise period(s); a case needs at least 4 (8 "
@@ -367,8 +367,8 @@ void register_gap_validate(CLI::App& app, Action& chosen) {
       ->each([c](const std::string&) { c->periods_given = true; });
   gval->add_option("--noise-from", c->noise_paths,
                    "measured noise instead of the synthetic: periodic records CSV (repeatable; one --noise-meta for "
-                   "all); each 4 consecutive periods give 2 noise periods, 3 left over give 1: contrasts in which the periodic "
-                   "response and a linear drift of it cancel (gap_cases.hpp)")
+                   "all); each 4 consecutive periods give 2 noise periods, 3 left over give 1: contrasts in which the "
+                   "periodic response and a linear drift of it cancel (gap_cases.hpp)")
       ->check(CLI::ExistingFile);
   gval->add_option("--noise-meta", c->noise_meta_path, "meta JSON of the --noise-from records")->check(CLI::ExistingFile);
   gval->add_option("--noise-input", c->noise_selection.inputs, "the --noise-from records' input column (header name)");

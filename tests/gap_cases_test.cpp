@@ -634,8 +634,8 @@ TEST(GapCases, MeasuredNoiseIsThePoolsPeriodsScaled) {
   };
   for (int i = 0; i < 6; ++i)
     for (int t = 0; t < P; ++t)
-      ASSERT_NEAR(pool->periods[static_cast<std::size_t>(i)][static_cast<std::size_t>(t)], contrast(4 * (i / 2), i % 2, t),
-                  1e-12 * 10 * scale);
+      ASSERT_NEAR(pool->periods[static_cast<std::size_t>(i)][static_cast<std::size_t>(t)],
+                  contrast(4 * (i / 2), i % 2, t), 1e-12 * 10 * scale);
   MeasuredNoise seven;
   seven.period = P;
   add_measured_noise(seven, column.head(7 * P), "seven periods");
