@@ -1448,10 +1448,8 @@ void add_measured_noise(MeasuredNoise& pool, const Eigen::VectorXd& column, cons
     const auto& contrasts = m + 4 <= R ? four : three;
     for (const auto& c : contrasts) {
       std::vector<double> n(static_cast<std::size_t>(P), 0.0);
-      for (std::size_t i = 0; i < c.size(); ++i) {
-        const Eigen::Index first = (m + static_cast<Eigen::Index>(i)) * P;
-        for (Eigen::Index t = 0; t < P; ++t) n[static_cast<std::size_t>(t)] += c[i] * column(first + t);
-      }
+      Eigen::Map<Eigen::VectorXd> sum(n.data(), P);
+      for (std::size_t i = 0; i < c.size(); ++i) sum += c[i] * column.segment((m + static_cast<Eigen::Index>(i)) * P, P);
       pool.periods.push_back(std::move(n));
     }
     m += static_cast<Eigen::Index>(contrasts.front().size());
