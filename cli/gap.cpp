@@ -347,7 +347,7 @@ void register_gap_diagnosis(CLI::App& app, Action& chosen) {
       },
       "(0, 1)");
   gap->add_option("--alpha", o.alpha, "level of each detection test (default 0.01)")->check(level);
-  gap->add_option("--effect-alpha", o.effect_alpha, "level of the F-test admitting an effect (default 1e-3)")
+  gap->add_option("--effect-alpha", o.effect_alpha, "level of the test admitting an effect: a linear effect's F-test, leakage's transient test (default 1e-3)")
       ->check(level);
   gap->add_option("--fdr", o.fdr, "false-discovery rate of the bands (default 0.05)")->check(level);
   on_parsed(gap, c, chosen, run_gap);

@@ -403,7 +403,8 @@ ContinuousRecord continuous_record(std::uint64_t seed, const std::vector<double>
 // of the model (the continuous model's free response sampled, e^{A Ts} per
 // sample), not whether it is large. 40 records at alpha = 0.01: under the null
 // the false alarms are Binomial(40, ≤ 0.01), P(≥ 3) = 0.0075; the test allows
-// 2 (measured: 0). Before, a continuous model's leakage test combined the
+// 2 (measured: 0 until stop 42; since, 1 — seed 38 at p 2.9e-3, not admitted,
+// leakage enters at effect_alpha). Before, a continuous model's leakage test combined the
 // per-line period deviations (a test of their size) and reported leakage on
 // every one of the first 12 at p < 1e-6.
 // The positive control: a decaying free response of the 3 Hz mode in the
@@ -411,15 +412,16 @@ ContinuousRecord continuous_record(std::uint64_t seed, const std::vector<double>
 TEST(GapDiagnosis, NonStationaryNoiseIsNoLeakageButATransientIs) {
   const std::vector<double> power = {1.6, 0.8, 1.0, 0.9, 1.2, 0.85, 1.1, 0.95};
   int alarms = 0;
+  std::string list;
   for (std::uint64_t seed = 1; seed <= 40; ++seed) {
     const ContinuousRecord c = continuous_record(seed, power, [](double) { return 0.0; });
     const GapReport r = diagnose_gap(c.model, c.record, 1, c.meta);
     if (r.p_leakage < r.options.alpha || has(r, "leakage")) {
       ++alarms;
-      ADD_FAILURE() << "seed " << seed << ": " << verdict(r);
+      list += "\nseed " + std::to_string(seed) + ": " + verdict(r);
     }
   }
-  EXPECT_LE(alarms, 2);
+  EXPECT_LE(alarms, 2) << list;
   const double sigma = 2 * M_PI * 3 * 0.03 * 6, wd = 2 * M_PI * 3;  // ζω stretched 6×: a visibly decaying term
   const ContinuousRecord c =
       continuous_record(99, power, [&](double t) { return 0.3 * std::exp(-sigma * t) * std::cos(wd * t); });
@@ -510,6 +512,41 @@ GapReport diagnose_case(std::vector<Effect> effects, Strength strength, std::uin
   o.seed = seed;
   const GapCase c = make_gap_case(o);
   return diagnose_gap(c.sim_model, c.record, 1, c.meta);
+}
+
+// Issue 17: subtle transients in coloured noise. gap-validate classic seed 2,
+// cases 15 and 75 (subtle leakage, ratios 0.52 and 0.95 of the noise floor;
+// noise filters with poles of modulus 0.87 and 0.88): the frequency-domain
+// test (until stop 42) gave p 0.012 and 0.37 — the noise filter's own leakage
+// term, fitted by the model's transient basis, inflated the later periods' F
+// 3 and 14 times — and both were read as no effect. Whitened in time
+// (Diagnosis::leakage_p) they are found at p < 1e-10; the test here asks for
+// effect_alpha, the level that admits leakage.
+// The level: 20 effect-free generated cases (M = 8, P = 512, coloured noise
+// of the generator's random filters, SNR 20–60 dB): under the null the count
+// below alpha = 0.01 is Binomial(20, ≤ 0.01), P(≥ 3) = 0.001; allowed 2.
+TEST(GapDiagnosis, ASubtleTransientInColouredNoiseIsLeakage) {
+  for (std::uint64_t seed : {2000021u, 2000081u}) {
+    const GapReport r = diagnose_case({Effect::Leakage}, Strength::Subtle, seed);
+    SCOPED_TRACE("seed " + std::to_string(seed) + ": " + verdict(r));
+    EXPECT_LT(r.p_leakage, r.options.effect_alpha);
+    EXPECT_EQ(names(r.present), std::vector<std::string>{"leakage"});
+  }
+  int below = 0;
+  std::string list;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    GapCaseOptions o;
+    o.strength = Strength::None;
+    o.period = 512;
+    o.seed = 7000000 + seed;
+    const GapCase c = make_gap_case(o);
+    const GapReport r = diagnose_gap(c.sim_model, c.record, 1, c.meta);
+    if (r.p_leakage < r.options.alpha) {
+      ++below;
+      list += " seed " + std::to_string(o.seed) + ": p(leakage) " + std::to_string(r.p_leakage) + ";";
+    }
+  }
+  EXPECT_LE(below, 2) << list;
 }
 
 // A delay and a low-pass together: before, the joint refit turned the second-

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "fdsid/model.hpp"
+#include "numerics/autoregression.hpp"
 #include "numerics/constants.hpp"
 #include "numerics/fft.hpp"
 #include "fdsid/format.hpp"
@@ -88,6 +89,30 @@ TEST(NumericsRiccati, MinimumPhaseModelGivesItsOwnGramian) {
 TEST(NumericsStein, ScalarClosedForm) {
   const Eigen::MatrixXd A = Eigen::MatrixXd::Constant(1, 1, 0.9), Q = Eigen::MatrixXd::Constant(1, 1, 2.0);
   EXPECT_NEAR(stein_smith(A, Q)(0, 0), 2.0 / (1 - 0.81), 1e-12);
+}
+
+// The exact autocovariances of x(t) = 1.5 x(t−1) − 0.8 x(t−2) + e(t) (poles
+// of modulus √0.8, at ±0.58 rad): ρ(1) = φ₁/(1 − φ₂), ρ(k) = φ₁ρ(k−1) + φ₂ρ(k−2)
+// (Yule–Walker). From them the Levinson–Durbin recursion gives the whitening
+// filter (1, −1.5, 0.8) and reflection coefficients 0 beyond order 2, so
+// Schwarz's criterion picks order 2 (each further order costs ln N and gains
+// nothing). Tolerance: the recursion's error is u times the condition of the
+// 3 × 3 Toeplitz matrix of ρ (96 here) times a small constant (10):
+// ≈ 2e-13, checked at 1e-12. White noise's (1, 0, …) gives the filter (1).
+TEST(NumericsAutoregression, LevinsonDurbinRecoversAnArTwo) {
+  const double phi1 = 1.5, phi2 = -0.8;
+  Eigen::VectorXd r(11);
+  r(0) = 1;
+  r(1) = phi1 / (1 - phi2);
+  for (int k = 2; k < 11; ++k) r(k) = phi1 * r(k - 1) + phi2 * r(k - 2);
+  const Eigen::VectorXd a = whitening_filter(3.7 * r, 10, 1e5);  // any positive factor
+  ASSERT_EQ(a.size(), 3);
+  EXPECT_NEAR(a(0), 1, 1e-12);
+  EXPECT_NEAR(a(1), -phi1, 1e-12);
+  EXPECT_NEAR(a(2), -phi2, 1e-12);
+  Eigen::VectorXd white = Eigen::VectorXd::Zero(11);
+  white(0) = 2;
+  EXPECT_EQ(whitening_filter(white, 10, 1e5).size(), 1);
 }
 
 TEST(NumericsOptimize, MinimisersFindAQuadraticsMinimum) {

@@ -64,7 +64,7 @@ namespace fdsid {
 
 struct GapOptions {
   double alpha = 0.01;         ///< level of each detection test (gap, nonlinearity, leakage)
-  double effect_alpha = 1e-3;  ///< level of the F-test admitting a linear effect
+  double effect_alpha = 1e-3;  ///< level of the F-test admitting a linear effect, and of the transient test admitting leakage
   double min_share = 0.25;     ///< share of the current excess gap an admitted effect must remove
   double fdr = 0.05;           ///< Benjamini–Hochberg false-discovery rate of the bands
 };
