@@ -19,6 +19,7 @@
 
 #include "fdsid/error.hpp"
 #include "fdsid/format.hpp"
+#include "fdsid/model.hpp"
 #include "numerics/autoregression.hpp"
 #include "numerics/complex.hpp"
 #include "numerics/constants.hpp"
@@ -1076,17 +1077,13 @@ class Diagnosis {
   }
 
   // The model's free responses over one period, column i = C A_dᵗ e_i,
-  // t = 0 … P−1, each column's mean removed (leakage_p); empty for a static
-  // model or when they overflow (an unstable model over a long period).
+  // t = 0 … P−1 (the extended observability matrix O_P of (A_d, C)), each
+  // column's mean removed (leakage_p); empty for a static model or when they
+  // overflow (an unstable model over a long period).
   static Eigen::MatrixXd free_response(const StateSpace& model, const Spectra& s) {
     const bool discrete = model.domain == Domain::Discrete;
     const Eigen::MatrixXd Ad = discrete ? model.A : Eigen::MatrixXd((model.A * s.Ts).exp());
-    Eigen::MatrixXd X(s.P, model.order());
-    Eigen::RowVectorXd row = model.C.row(0);
-    for (int t = 0; t < s.P; ++t) {
-      X.row(t) = row;
-      row *= Ad;
-    }
+    const Eigen::MatrixXd X = observability(Ad, model.C.topRows(1), s.P);
     if (!X.allFinite()) return {};
     return X.rowwise() - X.colwise().mean();
   }
