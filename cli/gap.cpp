@@ -148,10 +148,22 @@ std::string distortion_line(const GapReport& r) {
   return line;
 }
 
+// The one linear effect of the chosen set that `alternatives` and
+// `possible_additions` refer to (a leading leakage may precede it).
+std::string linear_chosen(const GapReport& r) {
+  for (const EffectFit& f : r.chosen)
+    if (fdsid::is_linear(f.effect())) return fdsid::to_string(f.effect());
+  return "?";
+}
+
 // The text report of one output channel.
 void print_report(Out& out, const GapReport& r, int periods) {
   out << "gap before " << sci(r.gap_before) << " (1 = the model is right up to the noise; " << r.excited
-      << " excited lines, M = " << periods << "), after " << sci(r.gap_after) << "\n";
+      << " excited lines, M = " << periods << "), after " << sci(r.gap_after)
+      << (r.periods_used < periods ? " (on the last " + std::to_string(r.periods_used) +
+                                         " periods, where the model as given leaves " + sci(r.gap_model_used) + ")"
+                                   : std::string())
+      << "\n";
   out << verdict_line(r) << "\n";
   out << "tests: p(gap) " << p_text(r.p_gap) << ", p(nonlinearity, " << r.unexcited << " unexcited lines) "
       << p_text(r.p_nonlinearity) << ", p(leakage) " << p_text(r.p_leakage)
@@ -159,7 +171,7 @@ void print_report(Out& out, const GapReport& r, int periods) {
       << "\n";
   out << distortion_line(r) << "\n";
   if (!r.alternatives.empty()) {
-    const std::string e = fdsid::to_string(r.path.front().added);
+    const std::string e = linear_chosen(r);
     out << "indistinguishable here:";
     const char* sep = " ";
     for (const auto& [g, p] : r.alternatives) {
@@ -169,7 +181,7 @@ void print_report(Out& out, const GapReport& r, int periods) {
     out << "\n";
   }
   if (!r.possible_additions.empty()) {
-    const std::string e = fdsid::to_string(r.path.front().added);
+    const std::string e = linear_chosen(r);
     out << "possibly also here:";
     const char* sep = " ";
     for (const auto& [g, p] : r.possible_additions) {

@@ -40,7 +40,11 @@
 /// gap by more than 3 null standard deviations of it; among admissible
 /// additions the lowest Schwarz criterion wins (a richer effect pays for its
 /// parameters). The chosen set never leaves more than the best effect admitted
-/// alone by more than those 3 sd. Verdict: no_gap, explained (what remains
+/// alone by more than those 3 sd. A transient proven on the model as given
+/// (the transient test rejects at effect_alpha) leads: its periods are dropped
+/// first and the other effects selected on the steady-state periods, without
+/// the 3 sd rule for that step (the transient's scatter hides misfit in the
+/// noise floor; gap_model_used). Verdict: no_gap, explained (what remains
 /// passes the gap test at alpha) or unexplained (see GapVerdict).
 /// Bands: Benjamini–Hochberg at a stated false-discovery rate over the
 /// per-line p-values of the model as given; flagged excited lines within two
@@ -222,8 +226,14 @@ struct GapReport {
   /// remains after the present effects; p_gap when none is present.
   double p_after = 1;
   /// Share of the excess gap the present effects remove:
-  /// (gap_before − gap_after) / (gap_before − 1); 0 when none is present.
+  /// (g − gap_after) / (g − 1) with g = max(gap_before, gap_model_used); 0
+  /// when none is present.
   double explained_share = 0;
+  /// The model as given on the periods gap_after is measured on (the last
+  /// periods_used): gap_before when no transient period was dropped. A
+  /// transient's period-to-period scatter inflates the noise floor, so this
+  /// can exceed gap_before: the misfit the transient hid.
+  double gap_model_used = 0;
   /// The forward selection's stages, in order (empty when none was admitted).
   std::vector<SelectionStep> path;
   std::vector<Effect> present;                     ///< judged present, largest shrink first
