@@ -349,6 +349,30 @@ TEST(GapDiagnosis, TransientFromRestIsLeakage) {
   EXPECT_LT(r.gap_after, 2.0);
 }
 
+// The same transient in a 4-period record (the F-16's measured-noise cases
+// have M = 4): its one transient period is dropped and 3 are kept, the
+// selection's noise bound then from the F(2, 4) law by Monte Carlo
+// (gap_noise_bound in gap.cpp). Until stop 43 no period of a 4-period record
+// could go (at least 4 were kept) and leakage was never admitted there.
+TEST(GapDiagnosis, TransientInAFourPeriodRecordIsLeakage) {
+  const StateSpace g = pintelon_plant();
+  RecordMeta meta;
+  RecordOptions o = options(11, 0.0);
+  o.periods = 4;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(g.order());
+  const Eigen::MatrixXd rec = with_output(simulate_periodic_record(g, o, meta), 11, [&](double u, double) {
+    const double y = (g.C * x)(0) + g.D(0, 0) * u;
+    x = g.A * x + g.B.col(0) * u;
+    return y;
+  });
+  const GapReport r = diagnose_gap(g, rec, 1, meta);
+  SCOPED_TRACE(verdict(r));
+  EXPECT_LT(r.p_leakage, r.options.effect_alpha);
+  EXPECT_EQ(names(r.present), std::vector<std::string>{"leakage"});
+  EXPECT_EQ(r.periods_used, 3);
+  EXPECT_EQ(r.verdict, GapVerdict::Explained);
+}
+
 // A proven transient leads the selection (issue 17; the circuit's record,
 // README "Real data"): the plant driven from rest (as TransientFromRestIsLeakage)
 // with a 0.1 % gain error at the sensor. On all 8 periods the transient's
