@@ -329,19 +329,23 @@ TEST(GapDiagnosis, CubicFeedbackThroughTheStructureIsOneInLoopNonlinearity) {
   EXPECT_NEAR(param(r, "nonlinearity", "a1"), 0.0, 0.011);
 }
 
-TEST(GapDiagnosis, TransientFromRestIsLeakage) {
-  // The plant driven from rest: the record's first period carries the transient
-  // (poles of modulus ≤ 0.954: 0.954^512 ≈ 4e-11 of it is left after one period).
-  const StateSpace g = pintelon_plant();
+// The plant g driven from rest by the record of `o` (seed 11, output noise
+// 0.01), its output scaled by `gain`: the first period carries the transient
+// (the Eq. (36) plant's poles have modulus ≤ 0.954: 0.954^512 ≈ 4e-11 of it
+// is left after one period).
+GapReport diagnose_from_rest(const StateSpace& g, const RecordOptions& o, double gain = 1.0) {
   RecordMeta meta;
   Eigen::VectorXd x = Eigen::VectorXd::Zero(g.order());
-  const Eigen::MatrixXd rec =
-      with_output(simulate_periodic_record(g, options(11, 0.0), meta), 11, [&](double u, double) {
-        const double y = (g.C * x)(0) + g.D(0, 0) * u;
-        x = g.A * x + g.B.col(0) * u;
-        return y;
-      });
-  const GapReport r = diagnose_gap(g, rec, 1, meta);
+  const Eigen::MatrixXd rec = with_output(simulate_periodic_record(g, o, meta), 11, [&](double u, double) {
+    const double y = (g.C * x)(0) + g.D(0, 0) * u;
+    x = g.A * x + g.B.col(0) * u;
+    return gain * y;
+  });
+  return diagnose_gap(g, rec, 1, meta);
+}
+
+TEST(GapDiagnosis, TransientFromRestIsLeakage) {
+  const GapReport r = diagnose_from_rest(pintelon_plant(), options(11, 0.0));
   SCOPED_TRACE(verdict(r));
   EXPECT_EQ(names(r.present), std::vector<std::string>{"leakage"});
   EXPECT_LT(r.p_leakage, 1e-6);
@@ -355,17 +359,9 @@ TEST(GapDiagnosis, TransientFromRestIsLeakage) {
 // (gap_noise_bound in gap.cpp). Until stop 43 no period of a 4-period record
 // could go (at least 4 were kept) and leakage was never admitted there.
 TEST(GapDiagnosis, TransientInAFourPeriodRecordIsLeakage) {
-  const StateSpace g = pintelon_plant();
-  RecordMeta meta;
   RecordOptions o = options(11, 0.0);
   o.periods = 4;
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(g.order());
-  const Eigen::MatrixXd rec = with_output(simulate_periodic_record(g, o, meta), 11, [&](double u, double) {
-    const double y = (g.C * x)(0) + g.D(0, 0) * u;
-    x = g.A * x + g.B.col(0) * u;
-    return y;
-  });
-  const GapReport r = diagnose_gap(g, rec, 1, meta);
+  const GapReport r = diagnose_from_rest(pintelon_plant(), o);
   SCOPED_TRACE(verdict(r));
   EXPECT_LT(r.p_leakage, r.options.effect_alpha);
   EXPECT_EQ(names(r.present), std::vector<std::string>{"leakage"});
@@ -385,16 +381,7 @@ TEST(GapDiagnosis, TransientInAFourPeriodRecordIsLeakage) {
 // Before (leakage tried like any effect) it was refused at stage 1: its gap
 // rose beyond the 3 null sd bound (0.53 here).
 TEST(GapDiagnosis, AProvenTransientLeadsAndUncoversTheGainItHid) {
-  const StateSpace g = pintelon_plant();
-  RecordMeta meta;
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(g.order());
-  const Eigen::MatrixXd rec =
-      with_output(simulate_periodic_record(g, options(11, 0.0), meta), 11, [&](double u, double) {
-        const double y = (g.C * x)(0) + g.D(0, 0) * u;
-        x = g.A * x + g.B.col(0) * u;
-        return 1.001 * y;
-      });
-  const GapReport r = diagnose_gap(g, rec, 1, meta);
+  const GapReport r = diagnose_from_rest(pintelon_plant(), options(11, 0.0), 1.001);
   SCOPED_TRACE(verdict(r));
   ASSERT_FALSE(r.path.empty());
   EXPECT_EQ(r.path.front().added, Effect::Leakage);
