@@ -1547,7 +1547,8 @@ struct Stage {
 //    gap-validate seeds 1, 3, 4 all test at p < 1e-8); when it rejects on the
 //    model as given, leakage leads instead (leakage_stage);
 // and, for every effect, the joint gap does not rise by more than the noise
-// (3 null sd): an effect that makes the fit worse never enters. Of the linear
+// (gap_noise_bound of the periods the joint fit uses: 3 null sd from 4
+// periods on): an effect that makes the fit worse never enters. Of the linear
 // effects only the one with the lowest criterion is tested. Among the
 // admissible additions the one with the lowest Schwarz criterion
 // (V + ½ ln(2K) q + Σ ln N_e) / K (N_e: the locations effect e searched,
@@ -1568,10 +1569,15 @@ class ForwardSelection {
                    const GapOptions& o)
       : dg_(dg), s_(s), a0_(a0), drop_(drop), p_leakage_(p_leakage),
         leakage_first_(drop > 0 && p_leakage < o.effect_alpha), o_(o) {
-    floor_ = gap_noise_bound(s.M - (leakage_first_ ? drop : 0), static_cast<int>(s.exc.size()));
+    const int K = static_cast<int>(s.exc.size());
+    floor_all_ = gap_noise_bound(s.M, K);
+    floor_kept_ = drop > 0 ? gap_noise_bound(s.M - drop, K) : floor_all_;
   }
 
-  double floor() const { return floor_; }
+  // The noise bound of a stage's gap (gap_noise_bound) for the periods it
+  // uses: all, or those after the transient's (a leading leakage, or one
+  // admitted later).
+  double floor(const Stage& st) const { return st.first > 0 ? floor_kept_ : floor_all_; }
 
   // The stages taken, from the model as given (stage 0) to the chosen set;
   // `best_single`: of the effects admitted alone (stage 1), the one leaving
@@ -1667,21 +1673,21 @@ class ForwardSelection {
       next.linear.push_back(e);
     }
     next = evaluate(std::move(next));
-    if (e == Effect::Nonlinearity && !(next.gap <= cur.gap + floor_)) {
+    if (e == Effect::Nonlinearity && !(next.gap <= cur.gap + floor(next))) {
       // Detected on the unexcited lines, but the static polynomial on the
       // linear prediction is not the record's nonlinearity (one inside the
       // loop or behind another element): present, without a fitted term.
       next.distortion_fitted = false;
       next = evaluate(std::move(next));
     }
-    next.admitted = next.gap <= cur.gap + floor_;
+    next.admitted = next.gap <= cur.gap + floor(next);
     if (is_linear(e)) {
       // At least one parameter: the joint refit can lower another effect's
       // order (a second-order sensor becomes first order beside a delay), and
       // q ≤ 0 would make the test say p = 1 for any decrease (as exchanged()).
       const int q = std::max(1, next.q - cur.q);
       p = dg_.searched_p(e, dg_.f_test(cur.V, next.V, q, next.q));
-      next.admitted = next.admitted && p < o_.effect_alpha && relevant(cur.gap, next.gap);
+      next.admitted = next.admitted && p < o_.effect_alpha && relevant(cur.gap, next.gap, floor(cur));
     }
     for (EffectFit& f : next.fits)
       if (f.effect() == e) f.p_value = p;
@@ -1750,8 +1756,8 @@ class ForwardSelection {
         alt = evaluate(std::move(alt));
         const int q = alt.q - cur.q;
         const double p = dg_.searched_p(g, dg_.f_test(cur.V, alt.V, std::max(1, q), alt.q));
-        if (score(alt) < score(next) && p < o_.effect_alpha && alt.gap <= cur.gap + floor_ &&
-            relevant(cur.gap, alt.gap)) {
+        if (score(alt) < score(next) && p < o_.effect_alpha && alt.gap <= cur.gap + floor(alt) &&
+            relevant(cur.gap, alt.gap, floor(cur))) {
           for (EffectFit& f : alt.fits)
             if (f.effect() == g || f.effect() == added) f.p_value = p;
           next = std::move(alt);
@@ -1835,9 +1841,10 @@ class ForwardSelection {
   }
 
   // The relevance rule: a step from gap g_from to g_to must remove min_share
-  // of the excess gap g_from − 1 (or of the floor, when the excess is below it).
-  bool relevant(double g_from, double g_to) const {
-    return g_from - g_to >= o_.min_share * std::max(g_from - 1, floor_);
+  // of the excess gap g_from − 1 (or of the noise bound `floor` of the
+  // stage's periods, when the excess is below it).
+  bool relevant(double g_from, double g_to, double floor) const {
+    return g_from - g_to >= o_.min_share * std::max(g_from - 1, floor);
   }
 
   double score(const Stage& st) const {
@@ -1853,7 +1860,7 @@ class ForwardSelection {
   double p_leakage_;
   bool leakage_first_;
   const GapOptions& o_;
-  double floor_ = 0;
+  double floor_all_ = 0, floor_kept_ = 0;
 };
 
 // The chosen set (gap.hpp): the forward selection's last stage, unless an
@@ -1874,7 +1881,7 @@ Augment choose_effects(const Diagnosis& dg, const Spectra& s, const Augment& a0,
                         "); the other effects are selected on the remaining steady-state periods, on which the model "
                         "as given leaves gap " + sci(path[base].gap, 4) + " (" + sci(rep.gap_before, 4) +
                         " on all periods)");
-  if (best_single && best_single->gap < path.back().gap - sel.floor()) {
+  if (best_single && best_single->gap < path.back().gap - sel.floor(path.back())) {
     rep.notes.push_back("the forward selection left gap " +
                         sci(path.back().gap, 4) + ", more than " + std::string(to_string(best_single->fits.back().effect())) +
                         " alone (" + sci(best_single->gap, 4) + "): the single is reported");
