@@ -185,7 +185,14 @@ using numerics::nelder_mead;
 struct Augment {
   Eigen::VectorXcd base;
   std::map<Effect, Eigen::VectorXcd, ByName> mult, add;
-  Eigen::MatrixXcd nl;  // M × lines, or empty
+  // M × lines, or none. Shared, never changed once made: the fits copy
+  // their states many times, and at P = 8192 the matrix is 0.5 MB (copied, it
+  // was a fifth of a diagnosis, most of it page faults of fresh allocations).
+  std::shared_ptr<const Eigen::MatrixXcd> nl;
+  const Eigen::MatrixXcd& distortion() const {
+    static const Eigen::MatrixXcd none;
+    return nl ? *nl : none;
+  }
   int first = 0;
   Eigen::VectorXcd multiplier() const {
     Eigen::VectorXcd m = Eigen::VectorXcd::Ones(base.size());
@@ -273,7 +280,7 @@ LineStats line_stats(const Spectra& s, const Augment& a, const std::vector<int>&
   const std::vector<int> periods = period_range(a.first, s.M - 1);
   Eigen::VectorXcd e(M);
   for (size_t i = 0; i < idx.size(); ++i) {
-    const Moments mo = residual_moments(s, G, a.nl, idx[i], periods, e);
+    const Moments mo = residual_moments(s, G, a.distortion(), idx[i], periods, e);
     st.mean(i) = mo.mean;
     st.var(i) = mo.var;
     st.t(i) = M * std::norm(mo.mean) / mo.var;
@@ -331,7 +338,7 @@ Weighted weighted(const Spectra& s, const Augment& a) {
     for (int l = a.first; l < s.M; ++l) {
       y += s.Y(l, k);
       u += s.U(l, k);
-      if (a.nl.size()) n += a.nl(l, k);
+      if (a.nl) n += (*a.nl)(l, k);
     }
     const double M = s.M - a.first;
     W.T(i) = (y - n) / M;
@@ -942,7 +949,7 @@ class Diagnosis {
   //    signal-to-noise ratios where a distortion is detectable at all.
   Trial fit_nonlinearity(const Augment& a0) const {
     Augment a = a0;
-    a.nl.resize(0, 0);
+    a.nl.reset();
     const Eigen::VectorXcd G = a.G();
     const int L = static_cast<int>(s_.xi.size());
     Fft& fft = this_thread_fft();
@@ -958,7 +965,14 @@ class Diagnosis {
     for (Form form : {Output, Input, InLoop}) {
       const std::vector<int> degrees = form == InLoop ? std::vector<int>{1, 2, 3} : std::vector<int>{2, 3};
       const int q = static_cast<int>(degrees.size());
-      std::vector<Eigen::MatrixXcd> Q(q, Eigen::MatrixXcd::Zero(s_.M, L));
+      // Q[d]: the term of degree degrees[d] per period and line. Its storage
+      // is kept per thread (q M × L matrices, 1.5 MB at P = 8192: made fresh
+      // per call they were 80 % of a diagnosis's page faults, a third of its
+      // time on this VM; setZero on a matrix of the same size reallocates
+      // nothing).
+      thread_local std::vector<Eigen::MatrixXcd> Q;
+      if (Q.size() < static_cast<size_t>(q)) Q.resize(static_cast<size_t>(q));
+      for (int d = 0; d < q; ++d) Q[d].setZero(s_.M, L);
       double scale = 0;
       for (int l = a.first; l < s_.M; ++l) {
         if (form == InLoop && l > a.first) {  // the same term in every period
@@ -992,17 +1006,18 @@ class Diagnosis {
       weighted_ls(Phi, st.mean, w, c);
       Nonlinearity p{true, 0, 0, form == Input, form == InLoop, 0};
       Trial t{a, {0, 0, q, 1, p}, 0};
-      t.state.nl = Eigen::MatrixXcd::Zero(s_.M, L);
+      Eigen::MatrixXcd nl = Eigen::MatrixXcd::Zero(s_.M, L);
       for (int d = 0; d < q; ++d) {
         const double coef = c(d) / std::pow(scale, degrees[d]);
         (degrees[d] == 1 ? p.a1 : degrees[d] == 2 ? p.a2 : p.a3) = coef;
-        t.state.nl += coef * Q[d];
+        nl += coef * Q[d];
       }
+      t.state.nl = std::make_shared<const Eigen::MatrixXcd>(std::move(nl));
       t.fit.parameters = p;
       t.V = line_stats(s_, t.state, s_.exc).pooled_cost;
       if (t.V + penalty_ * q < best_score) {
         best_score = t.V + penalty_ * q;
-        best = t;
+        best = std::move(t);
       }
     }
     if (!std::isfinite(best.V)) best.V = line_stats(s_, a, s_.exc).pooled_cost;
