@@ -186,8 +186,8 @@ struct Augment {
   Eigen::VectorXcd base;
   std::map<Effect, Eigen::VectorXcd, ByName> mult, add;
   // M × lines, or none. Shared, never changed once made: the fits copy
-  // their states many times, and at P = 8192 the matrix is 0.5 MB (copied, it
-  // was a fifth of a diagnosis, most of it page faults of fresh allocations).
+  // their states many times, and at P = 8192 the matrix is 0.5 MB, a fresh
+  // allocation (and its page faults) per copy when it was held by value.
   std::shared_ptr<const Eigen::MatrixXcd> nl;
   const Eigen::MatrixXcd& distortion() const {
     static const Eigen::MatrixXcd none;
