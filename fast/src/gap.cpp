@@ -961,16 +961,16 @@ class Diagnosis {
     Eigen::VectorXd y_mean = Eigen::VectorXd::Zero(s_.P);
     for (int l = a.first; l < s_.M; ++l) y_mean += s_.y_time.col(l);
     y_mean /= static_cast<double>(s_.M - a.first);
+    // Q[d], per form: the term of degree degrees[d] per period and line. Its
+    // storage is kept per thread (q M × L matrices, 1.5 MB at P = 8192: made
+    // fresh per call they were 80 % of a diagnosis's page faults, a third of
+    // its time on this VM; setZero on a matrix of the same size reallocates
+    // nothing).
+    thread_local std::vector<Eigen::MatrixXcd> Q;
     enum Form { Output, Input, InLoop };
     for (Form form : {Output, Input, InLoop}) {
       const std::vector<int> degrees = form == InLoop ? std::vector<int>{1, 2, 3} : std::vector<int>{2, 3};
       const int q = static_cast<int>(degrees.size());
-      // Q[d]: the term of degree degrees[d] per period and line. Its storage
-      // is kept per thread (q M × L matrices, 1.5 MB at P = 8192: made fresh
-      // per call they were 80 % of a diagnosis's page faults, a third of its
-      // time on this VM; setZero on a matrix of the same size reallocates
-      // nothing).
-      thread_local std::vector<Eigen::MatrixXcd> Q;
       if (Q.size() < static_cast<size_t>(q)) Q.resize(static_cast<size_t>(q));
       for (int d = 0; d < q; ++d) Q[d].setZero(s_.M, L);
       double scale = 0;
