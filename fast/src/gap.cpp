@@ -857,12 +857,15 @@ class Diagnosis {
     };
     std::vector<cplx> starts;
     const UnmodelledMode* prev = warm ? std::get_if<UnmodelledMode>(&warm->parameters) : nullptr;
-    if (prev && prev->mode) {  // a descent round: the previous resonance refined, its connection kept
+    const auto better = [](Trial par, Trial ser) {
+      std::get<UnmodelledMode>(par.fit.parameters).series = false;
+      std::get<UnmodelledMode>(ser.fit.parameters).series = true;
+      return ser.V < par.V ? ser : par;
+    };
+    if (prev && prev->mode) {  // a descent round: the previous resonance refined in both connections
       starts.push_back(pole_of(*prev->mode));
-      Trial t = prev->series ? fit_pole(a, Effect::UnmodelledMode, Xs, Rs, true, starts, true, false, in_series)
-                             : fit_pole(a, Effect::UnmodelledMode, Xp, Rp, true, starts, true, false, in_parallel);
-      std::get<UnmodelledMode>(t.fit.parameters).series = prev->series;
-      return t;
+      return better(fit_pole(a, Effect::UnmodelledMode, Xp, Rp, true, starts, true, false, in_parallel),
+                    fit_pole(a, Effect::UnmodelledMode, Xs, Rs, true, starts, true, false, in_series));
     }
     try {
       Eigen::VectorXd omega(K);
@@ -880,11 +883,8 @@ class Diagnosis {
     } catch (const Error&) {
       // the subspace start is optional; the grid still runs
     }
-    Trial par = fit_pole(a, Effect::UnmodelledMode, Xp, Rp, true, starts, true, true, in_parallel);
-    Trial ser = fit_pole(a, Effect::UnmodelledMode, Xs, Rs, true, starts, true, true, in_series);
-    std::get<UnmodelledMode>(par.fit.parameters).series = false;
-    std::get<UnmodelledMode>(ser.fit.parameters).series = true;
-    return ser.V < par.V ? ser : par;
+    return better(fit_pole(a, Effect::UnmodelledMode, Xp, Rp, true, starts, true, true, in_parallel),
+                  fit_pole(a, Effect::UnmodelledMode, Xs, Rs, true, starts, true, true, in_series));
   }
 
   // One of the model's resonances moved: its modal term r/(ξ−λ) + r̄/(ξ−λ̄)
