@@ -518,8 +518,9 @@ class Diagnosis {
   double search_cost(Effect effect) const { return std::log(locations(effect)); }
 
   // `warm`: the effect's fit of the previous descent round (fit_set): the two
-  // mode effects then refine that resonance (same connection, same model
-  // mode) instead of searching the band again.
+  // mode effects then refine that resonance (mode_mismatch the same model
+  // mode; unmodelled_mode in series and in parallel, the better kept) instead
+  // of searching the band again.
   Trial fit(Effect effect, const Augment& a, const EffectFit* warm = nullptr) const {
     const Augment b = a.without(effect);
     switch (effect) {
