@@ -321,6 +321,8 @@ int run_gap_validate(const GapValidateCommand& given) {
       << " cases, " << v.false_alarms_noted << " of the " << v.false_alarms << " false alarms\n";
   out << "  adjacent periods' noise alike (noted in the report): " << v.periods_dependent_noted << " of " << v.cases
       << " cases, " << v.false_alarms_dependent_noted << " of the " << v.false_alarms << " false alarms\n";
+  out << "  stand-ins named (a mode effect at its search's bound): " << v.stand_in_noted << " of " << v.cases
+      << " cases, " << v.stand_in_correct << " of them correct verdicts\n";
   out << "confusion (truth -> verdict: count):\n";
   for (const auto& t : v.confusion)
     for (const auto& p : t.second)

@@ -109,6 +109,7 @@ GapValidationCase run_case(const GapValidationOptions& o, int i, const std::file
     r.period_power_noted = rep.period_power_unequal();
     r.p_period_independence = rep.p_period_independence;
     r.periods_dependent_noted = rep.periods_dependent();
+    r.stand_ins = static_cast<int>(rep.stand_ins.size());
     const double Ts = meta.sample_time;
     for (const auto& tb : c.bands) {  // truth in cycles/sample, report in Hz
       bool hit = false;
@@ -183,6 +184,8 @@ GapValidation validate_gap(const GapValidationOptions& o) {
     v.correct_up_to_alternatives[r.category] += r.correct_up_to_alternatives;
     v.period_power_noted += r.period_power_noted;
     v.periods_dependent_noted += r.periods_dependent_noted;
+    v.stand_in_noted += r.stand_ins > 0;
+    v.stand_in_correct += r.stand_ins > 0 && r.correct;
     if (r.category == "none") {
       ++none;
       alarms += r.verdict != "none";
@@ -260,6 +263,7 @@ nlohmann::json gap_validation_to_json(const GapValidation& v) {
   j["period_power_noted"] = {{"cases", v.period_power_noted}, {"false_alarms", v.false_alarms_noted}};
   j["periods_dependent_noted"] = {{"cases", v.periods_dependent_noted},
                                   {"false_alarms", v.false_alarms_dependent_noted}};
+  j["stand_in_noted"] = {{"cases", v.stand_in_noted}, {"correct", v.stand_in_correct}};
   const auto& g = v.gap_after_correct;
   auto q = [&](double p) { return g.empty() ? NAN : g[static_cast<size_t>(p * (g.size() - 1))]; };
   j["gap_after_correct"] = {{"n", g.size()},     {"median", q(0.5)}, {"p90", q(0.9)},
@@ -276,7 +280,8 @@ nlohmann::json gap_validation_to_json(const GapValidation& v) {
                           {"gap_before", r.gap_before}, {"gap_after", r.gap_after}, {"truth_bands", r.truth_bands},
                           {"bands_hit", r.bands_hit}, {"correct_up_to_alternatives", r.correct_up_to_alternatives},
                           {"named_alternatives", r.named_alternatives},
-                          {"p_period_power", r.p_period_power}, {"p_period_independence", r.p_period_independence}};
+                          {"p_period_power", r.p_period_power}, {"p_period_independence", r.p_period_independence},
+                          {"stand_ins", r.stand_ins}};
     if (!r.error.empty()) row["error"] = r.error;
     j["rows"].push_back(row);
   }

@@ -255,6 +255,10 @@ struct GapReport {
   /// shape). With the p-value of adding g to e. Only with the verdict
   /// "explained": where a gap remains nothing explains the record as well.
   std::vector<std::pair<Effect, double>> possible_additions;
+  /// The chosen mode effects (unmodelled_mode, mode_mismatch) whose fit sits
+  /// at a bound of its search or, for a moved mode, outside the excited band:
+  /// stand-ins, not resonances the data resolve (a note each says why).
+  std::vector<Effect> stand_ins;
   int periods_used = 0;                            ///< M after dropping transient periods
   int excited = 0, unexcited = 0;                  ///< lines in each test
   double p_gap = 1, p_nonlinearity = 1, p_leakage = 1;  ///< detection tests on the model as given

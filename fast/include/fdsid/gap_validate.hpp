@@ -72,6 +72,8 @@ struct GapValidationCase {
   /// and whether it was noted.
   double p_period_independence = 1;
   bool periods_dependent_noted = false;
+  /// Chosen mode effects the report names stand-ins (GapReport::stand_ins).
+  int stand_ins = 0;
   std::string error;      ///< the diagnosis refused the case (counted as wrong)
 };
 
@@ -89,6 +91,9 @@ struct GapValidation {
   int period_power_noted = 0, false_alarms_noted = 0;
   /// The same for the note that adjacent periods' noise is alike.
   int periods_dependent_noted = 0, false_alarms_dependent_noted = 0;
+  /// Cases whose report names a stand-in (GapReport::stand_ins), and how many
+  /// of them are correct verdicts (a stand-in there is a false note).
+  int stand_in_noted = 0, stand_in_correct = 0;
   std::vector<double> gap_after_correct;  ///< sorted, correct verdicts with effects
   std::vector<GapValidationCase> rows;
   std::vector<std::string> noise_sources;  ///< measured noise's records (empty: synthetic noise)
