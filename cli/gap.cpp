@@ -196,6 +196,15 @@ void print_report(Out& out, const GapReport& r, int periods) {
     for (const auto& b : r.bands) out << " " << band_text(b);
     out << "\n";
   }
+  if (!r.peaks.empty()) {  // at most 8 intervals in the text; the JSON has all
+    out << "half the excess gap lies at (Hz):";
+    for (size_t i = 0; i < r.peaks.size() && i < 8; ++i) {
+      const auto& p = r.peaks[i];
+      out << " " << (p.band[0] == p.band[1] ? sci(p.band[0], 4) : band_text(p.band)) << " " << fmt(100 * p.share, 2) << " %";
+    }
+    if (r.peaks.size() > 8) out << " and " << r.peaks.size() - 8 << " more intervals";
+    out << "\n";
+  }
   out << "candidates (each alone):\n";
   for (const EffectFit& f : r.candidates) {
     char buf[160];

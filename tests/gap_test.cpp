@@ -732,6 +732,28 @@ TEST(GapDiagnosis, ASearchedModePaysForItsSearch) {
 // A mode narrower than a line spacing (ζ = 0.013 at line 24: half-power width
 // 0.6 lines) is fitted, not held at the old one-line bound (gap 2.8 left;
 // classic seed 2, case 5).
+// Where the gap concentrates (GapReport::peaks): for a resonance the model
+// lacks, the interval with the largest share holds the resonance (within two
+// lines), and the intervals hold at least half the excess gap, at most all.
+TEST(GapDiagnosis, TheGapsPeaksHoldHalfItsExcessAtTheResonance) {
+  const StateSpace g = pintelon_plant();
+  const double f = 61.0 / kP;
+  RecordMeta meta;
+  const Eigen::MatrixXd rec = simulate_periodic_record(with_mode(g, f, 0.05), options(9), meta);
+  const GapReport r = diagnose_gap(g, rec, 1, meta);
+  SCOPED_TRACE(verdict(r));
+  ASSERT_FALSE(r.peaks.empty());
+  EXPECT_LE(r.peaks[0].band[0], f + 2.0 / kP);
+  EXPECT_GE(r.peaks[0].band[1], f - 2.0 / kP);
+  double held = 0;
+  for (size_t i = 0; i < r.peaks.size(); ++i) {
+    held += r.peaks[i].share;
+    if (i > 0) EXPECT_LE(r.peaks[i].share, r.peaks[i - 1].share);
+  }
+  EXPECT_GE(held, 0.5);
+  EXPECT_LE(held, 1.0);
+}
+
 TEST(GapDiagnosis, ALightlyDampedModeAtALowLineIsFittedThrough) {
   const GapReport r = diagnose_case({Effect::UnmodelledMode}, Strength::Clear, 2000011);
   SCOPED_TRACE(verdict(r));

@@ -1481,6 +1481,40 @@ GapDistortion distortion_view(const Spectra& s, const Augment& a0, const LineSta
 // Method: Benjamini–Hochberg at `fdr` over p(k) = P(F(2, 2M−2) > t(k)); when
 // no line is flagged, over windows of 8 excited lines (Fisher-combined)
 // instead. Flagged lines within two excited lines of each other form a band.
+// GapReport::peaks, from the flagged lines (gap_bands).
+void gap_peaks(const Spectra& s, const LineStats& st0, GapReport& rep) {
+  const Eigen::Index K = st0.t.size();
+  const double excess = (st0.t.array() - 1).sum();
+  if (!(excess > 0)) return;
+  std::vector<Eigen::Index> order;
+  for (Eigen::Index i = 0; i < K; ++i)
+    if (rep.flagged[static_cast<size_t>(i)] && st0.t(i) > 1) order.push_back(i);
+  std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return st0.t(a) > st0.t(b); });
+  std::vector<bool> in(static_cast<size_t>(K), false);
+  double held = 0;
+  for (size_t n = 0; n < order.size() && held < excess / 2; ++n) {
+    in[static_cast<size_t>(order[n])] = true;
+    held += st0.t(order[n]) - 1;
+  }
+  for (Eigen::Index i = 0; i < K;) {
+    if (!in[static_cast<size_t>(i)]) {
+      ++i;
+      continue;
+    }
+    Eigen::Index last = i;
+    double sum = 0;
+    for (Eigen::Index j = i; j < K && j <= last + 2; ++j)
+      if (in[static_cast<size_t>(j)]) {
+        last = j;
+        sum += st0.t(j) - 1;
+      }
+    rep.peaks.push_back({{s.hz(s.exc[static_cast<size_t>(i)]), s.hz(s.exc[static_cast<size_t>(last)])}, sum / excess});
+    i = last + 1;
+  }
+  std::stable_sort(rep.peaks.begin(), rep.peaks.end(),
+                   [](const GapReport::Peak& a, const GapReport::Peak& b) { return a.share > b.share; });
+}
+
 void gap_bands(const Spectra& s, const LineStats& st0, double fdr, GapReport& rep) {
   std::vector<double> p(s.exc.size());
   for (size_t i = 0; i < p.size(); ++i) p[i] = f2_survival(st0.t(i), 2 * st0.M - 2);
@@ -1509,6 +1543,7 @@ void gap_bands(const Spectra& s, const LineStats& st0, double fdr, GapReport& re
     rep.bands.push_back({s.hz(s.exc[i]), s.hz(s.exc[last])});
     i = last + 1;
   }
+  gap_peaks(s, st0, rep);
 }
 
 // Runs task(0) … task(n − 1) on two workers, each taking the next untried
@@ -2224,6 +2259,8 @@ nlohmann::json gap_report_to_json(const GapReport& r) {
   for (Effect e : r.present) j["present"].push_back(to_string(e));
   j["bands"] = nlohmann::json::array();
   for (const auto& b : r.bands) j["bands"].push_back({b[0], b[1]});
+  j["peaks"] = nlohmann::json::array();
+  for (const auto& p : r.peaks) j["peaks"].push_back({{"band", {p.band[0], p.band[1]}}, {"share", p.share}});
   j["verdict"] = to_string(r.verdict);
   j["p_after"] = r.p_after;
   j["explained_share"] = r.explained_share;

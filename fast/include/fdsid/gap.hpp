@@ -238,6 +238,17 @@ struct GapReport {
   std::vector<SelectionStep> path;
   std::vector<Effect> present;                     ///< judged present, largest shrink first
   std::vector<std::array<double, 2>> bands;        ///< Hz (cycles/sample when Ts = 1)
+  /// Where the gap concentrates inside the bands: the fewest flagged lines
+  /// whose excess t(k) − 1 holds half the excess gap Σ_k (t(k) − 1) of the
+  /// model as given (all flagged lines when they hold less), merged into
+  /// intervals as the bands are (lines at most 2 excited lines apart), each
+  /// with its share of the excess; largest share first. Half, a median of
+  /// the excess over frequency: a description, no test.
+  struct Peak {
+    std::array<double, 2> band;  ///< Hz
+    double share = 0;            ///< of the whole excess gap
+  };
+  std::vector<Peak> peaks;
   std::vector<EffectFit> candidates;               ///< every effect tried alone, best first
   std::vector<EffectFit> chosen;                   ///< the present ones, as fitted jointly (greedy order)
   /// When one linear effect e is present: the other linear effects g that
