@@ -767,8 +767,9 @@ class Diagnosis {
   // at low lines — ζ = 0.013 at line 24, gap-validate classic seed 2 case 5 —
   // were then fitted at the bound and left gap 2.8.)
   static constexpr double kMinWidth = 0.5;
-  // The least damping ratio of an unmodelled mode, besides the width rule.
-  static constexpr double kMinDamping = 1e-3;
+  // The least damping ratio of an unmodelled mode, besides the width rule,
+  // and the largest (a resonance, not a smooth correction; fit_pole).
+  static constexpr double kMinDamping = 1e-3, kMaxDamping = 0.3;
   Trial fit_pole(const Augment& a, Effect effect, const Eigen::VectorXcd& X, const Eigen::VectorXcd& R,
                  bool with_d, const std::vector<cplx>& starts, bool grid, bool search,
                  const std::function<void(Augment&, cplx, const Eigen::VectorXd&)>& apply) const {
@@ -788,7 +789,7 @@ class Diagnosis {
       if (grid) {
         const double zeta = std::exp(v(1)) / std::hypot(v(0), std::exp(v(1)));
         const double k = v(0) / scale * s_.P;
-        if (!(v(0) >= th_lo && v(0) <= th_hi && zeta <= 0.3 && zeta >= std::max(kMinDamping, kMinWidth / (2 * k))))
+        if (!(v(0) >= th_lo && v(0) <= th_hi && zeta <= kMaxDamping && zeta >= std::max(kMinDamping, kMinWidth / (2 * k))))
           return std::numeric_limits<double>::infinity();
       }
       mode_terms(mode_pole(model_.domain, v(0), std::exp(v(1))), X, with_d, Phi);
@@ -915,7 +916,7 @@ class Diagnosis {
     const double lo = s_.hz(s_.exc.front()), hi = s_.hz(s_.exc.back());
     Bounds b;
     b.floor_value = std::max(kMinDamping, kMinWidth / (2 * fd / line));
-    b.upper = unmodelled && r->damping >= 0.3 * (1 - 0.01);
+    b.upper = unmodelled && r->damping >= kMaxDamping * (1 - 0.01);
     b.floor = unmodelled && r->damping <= b.floor_value * (1 + 0.01);
     b.edge = unmodelled && (std::abs(fd - lo) <= line / 2 || std::abs(fd - hi) <= line / 2);
     b.outside = !unmodelled && (fd < lo - line / 2 || fd > hi + line / 2);
@@ -1477,10 +1478,27 @@ GapDistortion distortion_view(const Spectra& s, const Augment& a0, const LineSta
   return d;
 }
 
-// Bands of the model as given: the flags and the bands of rep (gap.hpp).
-// Method: Benjamini–Hochberg at `fdr` over p(k) = P(F(2, 2M−2) > t(k)); when
-// no line is flagged, over windows of 8 excited lines (Fisher-combined)
-// instead. Flagged lines within two excited lines of each other form a band.
+// The runs of set lines in `in` (indices of the excited lines) within two
+// excited lines of each other, as {first, last}: the bands and the peaks
+// (gap.hpp) are merged alike.
+std::vector<std::array<size_t, 2>> runs_within_two(const std::vector<bool>& in) {
+  std::vector<std::array<size_t, 2>> out;
+  for (size_t i = 0; i < in.size();) {
+    if (!in[i]) {
+      ++i;
+      continue;
+    }
+    size_t j = i, last = i;
+    while (j < in.size() && j <= last + 2) {
+      if (in[j]) last = j;
+      ++j;
+    }
+    out.push_back({i, last});
+    i = last + 1;
+  }
+  return out;
+}
+
 // GapReport::peaks, from the flagged lines (gap_bands).
 void gap_peaks(const Spectra& s, const LineStats& st0, GapReport& rep) {
   const Eigen::Index K = st0.t.size();
@@ -1496,25 +1514,20 @@ void gap_peaks(const Spectra& s, const LineStats& st0, GapReport& rep) {
     in[static_cast<size_t>(order[n])] = true;
     held += st0.t(order[n]) - 1;
   }
-  for (Eigen::Index i = 0; i < K;) {
-    if (!in[static_cast<size_t>(i)]) {
-      ++i;
-      continue;
-    }
-    Eigen::Index last = i;
+  for (const auto& [first, last] : runs_within_two(in)) {
     double sum = 0;
-    for (Eigen::Index j = i; j < K && j <= last + 2; ++j)
-      if (in[static_cast<size_t>(j)]) {
-        last = j;
-        sum += st0.t(j) - 1;
-      }
-    rep.peaks.push_back({{s.hz(s.exc[static_cast<size_t>(i)]), s.hz(s.exc[static_cast<size_t>(last)])}, sum / excess});
-    i = last + 1;
+    for (size_t j = first; j <= last; ++j)
+      if (in[j]) sum += st0.t(static_cast<Eigen::Index>(j)) - 1;
+    rep.peaks.push_back({{s.hz(s.exc[first]), s.hz(s.exc[last])}, sum / excess});
   }
   std::stable_sort(rep.peaks.begin(), rep.peaks.end(),
                    [](const GapReport::Peak& a, const GapReport::Peak& b) { return a.share > b.share; });
 }
 
+// Bands of the model as given: the flags and the bands of rep (gap.hpp).
+// Method: Benjamini–Hochberg at `fdr` over p(k) = P(F(2, 2M−2) > t(k)); when
+// no line is flagged, over windows of 8 excited lines (Fisher-combined)
+// instead. Flagged lines within two excited lines of each other form a band.
 void gap_bands(const Spectra& s, const LineStats& st0, double fdr, GapReport& rep) {
   std::vector<double> p(s.exc.size());
   for (size_t i = 0; i < p.size(); ++i) p[i] = f2_survival(st0.t(i), 2 * st0.M - 2);
@@ -1530,19 +1543,7 @@ void gap_bands(const Spectra& s, const LineStats& st0, double fdr, GapReport& re
     for (size_t i = 0; i < p.size(); ++i) flag[i] = fw[i / w];
   }
   rep.flagged = flag;
-  for (size_t i = 0; i < flag.size();) {
-    if (!flag[i]) {
-      ++i;
-      continue;
-    }
-    size_t j = i, last = i;
-    while (j < flag.size() && j <= last + 2) {
-      if (flag[j]) last = j;
-      ++j;
-    }
-    rep.bands.push_back({s.hz(s.exc[i]), s.hz(s.exc[last])});
-    i = last + 1;
-  }
+  for (const auto& [first, last] : runs_within_two(flag)) rep.bands.push_back({s.hz(s.exc[first]), s.hz(s.exc[last])});
   gap_peaks(s, st0, rep);
 }
 
@@ -2182,7 +2183,7 @@ void note_bounds(const Diagnosis& dg, const Spectra& s, GapReport& rep) {
     if (!b) continue;
     const std::string name = to_string(f.effect());
     std::vector<std::string> why;
-    if (b->upper) why.push_back("its damping ratio at the search's upper bound 0.3");
+    if (b->upper) why.push_back("its damping ratio at the search's upper bound " + fmt(Diagnosis::kMaxDamping, 2));
     if (b->edge) why.push_back("its peak at the excited band's edge");
     if (b->outside)
       why.push_back("its peak outside the excited band (" + sci(s.hz(s.exc.front()), 4) + " to " +
