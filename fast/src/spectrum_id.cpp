@@ -79,11 +79,6 @@ class SummandDesign {
   // Writes the rows of sample z into D (rows_per_sample() x unknowns()) and, when
   // data != nullptr, the matching right-hand side into y.
   void rows(cplx z, const SpectrumData* data, int k, Eigen::Ref<Eigen::MatrixXd> D, Eigen::Ref<Eigen::VectorXd> y) {
-    if (m_ == 1) {
-      scalar_row(z, D.data(), D.outerStride());
-      if (data) y(0) = data->S(0, k).real();
-      return;
-    }
     resolvent_row(C_, blocks_, z, chi_);
     D.setZero();
     const double w = std::sqrt(2.0);
@@ -116,27 +111,36 @@ class SummandDesign {
     }
   }
 
-  // m = 1: the single row [2 Re χ(z), 1] into row[0], row[stride], ..., with only
-  // the real parts computed (same formulas as resolvent_row).
-  void scalar_row(cplx z, double* row, Eigen::Index stride) const {
-    // In real arithmetic (std::complex products go through NaN-checking library
-    // calls): with x + iy = z - a, a 2x2 block has det = u + iv, u = x^2 - y^2 + b^2,
-    // v = 2xy, and Re((z-a)/det) = (xu + yv)/|det|^2, Re(b/det) = b u/|det|^2.
-    const double zr = z.real(), zi = z.imag();
+  // m = 1: rows j = 0 … count−1 of D, the rows [2 Re χ(z_j), 1] of the
+  // points z_j = re[j] + i im[j], written column by column (D column-major:
+  // each column's loop over the points is contiguous and vectorises).
+  // In real arithmetic (std::complex products go through NaN-checking library
+  // calls): with x + iy = z - a, a 2x2 block has det = u + iv, u = x^2 - y^2 + b^2,
+  // v = 2xy, and Re((z-a)/det) = (xu + yv)/|det|^2, Re(b/det) = b u/|det|^2
+  // (the formulas of resolvent_row).
+  void scalar_rows(const double* re, const double* im, int count, Eigen::Ref<Eigen::MatrixXd> D) const {
     for (const Block& bl : blocks_) {
-      const double x = zr - bl.a, y = zi;
+      double* __restrict out0 = &D(0, bl.start);
       if (bl.size == 1) {
-        row[bl.start * stride] = 2.0 * C_(0, bl.start) * x / (x * x + y * y);
+        const double c = 2.0 * C_(0, bl.start), a = bl.a;
+        for (int j = 0; j < count; ++j) {
+          const double x = re[j] - a, y = im[j];
+          out0[j] = c * x / (x * x + y * y);
+        }
       } else {
-        const double u = x * x - y * y + bl.b * bl.b, v = 2.0 * x * y;
-        const double id = 1.0 / (u * u + v * v);
-        const double r11 = (x * u + y * v) * id, r12 = bl.b * u * id;
-        const double c0 = C_(0, bl.start), c1 = C_(0, bl.start + 1);
-        row[bl.start * stride] = 2.0 * (c0 * r11 - c1 * r12);
-        row[(bl.start + 1) * stride] = 2.0 * (c0 * r12 + c1 * r11);
+        double* __restrict out1 = &D(0, bl.start + 1);
+        const double c0 = C_(0, bl.start), c1 = C_(0, bl.start + 1), a = bl.a, b = bl.b;
+        for (int j = 0; j < count; ++j) {
+          const double x = re[j] - a, y = im[j];
+          const double u = x * x - y * y + b * b, v = 2.0 * x * y;
+          const double id = 1.0 / (u * u + v * v);
+          const double r11 = (x * u + y * v) * id, r12 = b * u * id;
+          out0[j] = 2.0 * (c0 * r11 - c1 * r12);
+          out1[j] = 2.0 * (c0 * r12 + c1 * r11);
+        }
       }
     }
-    row[n_ * stride] = 1.0;
+    D.col(n_).head(count).setOnes();
   }
 
   int e_position(int a, int b) const {  // a <= b, row-wise upper triangle
@@ -150,23 +154,40 @@ class SummandDesign {
   Eigen::MatrixXcd chi_;
 };
 
-// The grid points z_k = e^{iπk/M}, k = k0, k0+1, ...: a rotation recurrence
-// re-anchored on std::polar every 64 steps, so the error stays below ~64u while
-// sin/cos are called once per 64 samples.
-class GridWalker {
+// The grid points z_k = e^{iπk/M} as z_k = a_b t_j, k = 64 b + j, with
+// a_b = e^{iπ·64b/M} and t_j = e^{iπj/M} from std::polar: sin and cos run
+// once per 64 points (and 64 times per grid for the table), each z_k is within
+// ~3u of e^{iπk/M}, and it depends on k alone, not on where a range of points
+// starts: a split of the grid between threads computes the same z_k.
+class UnitGrid {
  public:
-  GridWalker(int k0, int M) : k_(k0), M_(M), step_(std::polar(1.0, M_PI / M)) { anchor(); }
-  cplx z() const { return z_; }
-  void next() {
-    ++k_;
-    if (k_ % 64 == 0) anchor();
-    else z_ *= step_;
+  explicit UnitGrid(int M) : M_(M) {
+    for (int j = 0; j < 64; ++j) table_[j] = std::polar(1.0, M_PI * j / M);
+  }
+  // z_k for k = k0 … k0 + count − 1 into re[0 …], im[0 …].
+  void points(int k0, int count, double* re, double* im) const {
+    for (int k = k0; k < k0 + count;) {
+      const int base = k & ~63, end = std::min(k0 + count, base + 64);
+      const cplx a = std::polar(1.0, M_PI * base / M_);
+      for (; k < end; ++k) {
+        const cplx t = table_[k - base];
+        re[k - k0] = a.real() * t.real() - a.imag() * t.imag();
+        im[k - k0] = a.real() * t.imag() + a.imag() * t.real();
+      }
+    }
   }
 
  private:
-  void anchor() { z_ = std::polar(1.0, M_PI * k_ / M_); }
-  int k_, M_;
-  cplx step_, z_;
+  int M_;
+  cplx table_[64];
+};
+
+// The points of a range of the grid in pieces of at most kGridPiece: the
+// arrays of UnitGrid::points, kept per object (one per thread).
+constexpr int kGridPiece = 1024;
+struct GridPiece {
+  double re[kGridPiece], im[kGridPiece];
+  cplx z(int j) const { return {re[j], im[j]}; }
 };
 
 // Hermitian spectrum value from the summand coefficients θ at row block D.
@@ -610,7 +631,8 @@ StableRealization step7_A_C(const Split& sp, const Eigen::MatrixXd& U2n, int m, 
 // Ŝ = Ê + X + X^H, X = Ĉ (zI - Â)^{-1} F̂; writes Ê and F̂ into s.
 // Method: the real design of SummandDesign, one group of rows per grid
 // sample, reduced to R of the augmented design [Φ | y] by the streamed QR
-// (numerics/qr.hpp): 1024 rows per chunk, the fill walking the grid per chunk;
+// (numerics/qr.hpp): 1024 rows per chunk, the fill computing the chunk's grid
+// points (UnitGrid) and, for m = 1, the design column by column (scalar_rows);
 // blocks by its default work rule (≥ 2^24 flops each, fixed by M and q, so the
 // result does not depend on the core count), which splits M = 10⁶ over both
 // cores of a 2-core machine; θ by back substitution.
@@ -631,14 +653,25 @@ Eigen::VectorXd step8_least_squares_EF(const SpectrumData& data, const StableRea
     throw Error(ErrorKind::Dimension, "step 8", "fewer equations than unknowns in the E, F fit");
   numerics::StreamedQrOptions qr_options;
   qr_options.rows_per_chunk = 1024;
+  const UnitGrid grid(M);
   const numerics::ChunkFill fill = [&](int k0, int k1, Eigen::Ref<Eigen::MatrixXd> rows) {
     SummandDesign design(sr.C, sr.blocks, m);  // its own work space: blocks of the QR may run on threads
     Eigen::VectorXd y(rps);
-    GridWalker grid(k0, M);
-    for (int j = 0; j < k1 - k0; ++j, grid.next()) {
-      auto blk = rows.middleRows(j * rps, rps);
-      design.rows(grid.z(), &data, k0 + j, blk.leftCols(q), y);
-      blk.col(q) = y;
+    GridPiece z;
+    for (int p0 = k0; p0 < k1; p0 += kGridPiece) {
+      const int count = std::min(kGridPiece, k1 - p0);
+      grid.points(p0, count, z.re, z.im);
+      auto piece = rows.middleRows((p0 - k0) * rps, count * rps);
+      if (m == 1) {
+        design.scalar_rows(z.re, z.im, count, piece.leftCols(q));
+        for (int j = 0; j < count; ++j) piece(j, q) = data.S(0, p0 + j).real();
+        continue;
+      }
+      for (int j = 0; j < count; ++j) {
+        auto blk = piece.middleRows(j * rps, rps);
+        design.rows(z.z(j), &data, p0 + j, blk.leftCols(q), y);
+        blk.col(q) = y;
+      }
     }
   };
   const Eigen::MatrixXd R = numerics::streamed_qr_r(M + 1, rps, q + 1, fill, qr_options);
@@ -661,41 +694,45 @@ Eigen::VectorXd step8_least_squares_EF(const SpectrumData& data, const StableRea
 // Step 8's check: Ŝ must be positive on the grid, or no spectral factor exists.
 //
 // Purpose: min over k of λ_min(Ŝ(z_k)) for the fitted θ.
-// Method: Ŝ(z_k) from the design rows times θ (m = 1: one row, without the
-// general path's temporaries), the smallest eigenvalue of its Hermitian form.
+// Method: Ŝ(z_k) from the design rows times θ (m = 1: the rows of 1024
+// points at a time, one matrix-vector product), the smallest eigenvalue of its Hermitian form.
 // Fails: Error(Positivity) when the minimum is not positive, naming ω.
 // References: Akçay (2011) Algorithm 1 step 8.
 double step8_fitted_spectrum_minimum(const StableRealization& sr, const Eigen::VectorXd& theta, int m, int M) {
   // The smallest value over samples k0 … k1−1, and where (the first k on a tie).
+  const UnitGrid grid(M);
   const auto range_minimum = [&](int k0, int k1) {
     SummandDesign design(sr.C, sr.blocks, m);
     const int q = design.unknowns(), rps = design.rows_per_sample();
-    Eigen::MatrixXd D(rps, q);
-    Eigen::VectorXd values(rps);
+    Eigen::MatrixXd D(m == 1 ? kGridPiece : rps, q);
+    Eigen::VectorXd values(D.rows());
+    GridPiece z;
     std::pair<double, int> best{std::numeric_limits<double>::infinity(), k0};
-    GridWalker grid(k0, M);
-    for (int k = k0; k < k1; ++k, grid.next()) {
-      double v;
+    for (int p0 = k0; p0 < k1; p0 += kGridPiece) {
+      const int count = std::min(kGridPiece, k1 - p0);
+      grid.points(p0, count, z.re, z.im);
       if (m == 1) {
-        design.scalar_row(grid.z(), D.data(), 1);
-        v = D.row(0).dot(theta);
-      } else {
-        design.rows(grid.z(), nullptr, k, D, values);
-        values.noalias() = D * theta;
-        v = min_hermitian_eigenvalue(unpack_hermitian(values, m));
+        design.scalar_rows(z.re, z.im, count, D);
+        values.head(count).noalias() = D.topRows(count) * theta;
+        for (int j = 0; j < count; ++j)
+          if (values(j) < best.first) best = {values(j), p0 + j};
+        continue;
       }
-      if (v < best.first) best = {v, k};
+      for (int j = 0; j < count; ++j) {
+        design.rows(z.z(j), nullptr, p0 + j, D, values);
+        values.noalias() = D * theta;
+        const double v = min_hermitian_eigenvalue(unpack_hermitian(values, m));
+        if (v < best.first) best = {v, p0 + j};
+      }
     }
     return best;
   };
-  // Two halves on two threads above 2^16 samples. The second half starts at
-  // a multiple of 64, where GridWalker re-anchors anyway, so every z_k (hence
-  // every value) is the one a single walk from k = 0 computes; the minimum is
-  // exact and ties go to the first k: the result does not depend on the split
-  // or the core count.
+  // Two halves on two threads above 2^16 samples. Every z_k (hence every
+  // value) depends on k alone (UnitGrid), so the minimum is exact and ties go
+  // to the first k: the result does not depend on the split or the core count.
   std::pair<double, int> lo, hi{std::numeric_limits<double>::infinity(), M + 1};
   if (M + 1 >= (1 << 16) && std::thread::hardware_concurrency() > 1) {
-    const int mid = ((M + 1) / 2) & ~63;
+    const int mid = (M + 1) / 2;
     std::thread t([&] { hi = range_minimum(mid, M + 1); });
     lo = range_minimum(0, mid);
     t.join();
