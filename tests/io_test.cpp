@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -109,6 +110,43 @@ TEST(SpectrumCsv, RefusesANonHermitianMimoSpectrum) {
   } catch (const Error& e) {
     // Line 2 (omega = 0) has S12_im = 0; line 3 is the first with a flipped sign.
     EXPECT_NE(std::string(e.what()).find("flipped.csv line 3: S21 is not conj(S12)"), std::string::npos) << e.what();
+  }
+}
+
+// Review (new user): a scalar spectrum with S_im = 0.3 S_re was identified
+// exactly as the clean file (the default extension discards Im S_aa). Noise
+// may give the diagonal an imaginary part (the bundled Section 4 file: complex
+// noise of level 1e-3, both signs), one sign at every sample it may not.
+TEST(SpectrumCsv, RefusesADiagonalWhoseImaginaryPartHasOneSign) {
+  std::ifstream f(std::string(FDSID_SOURCE_DIR) + "/data/akcay2011_M1000_eps1e-3.csv");
+  std::ostringstream noisy_text, skewed_text;
+  skewed_text << std::setprecision(17);
+  std::string line;
+  std::getline(f, line);
+  noisy_text << line << '\n';
+  skewed_text << line << '\n';
+  while (std::getline(f, line)) {
+    noisy_text << line << '\n';
+    std::istringstream row(line);
+    double omega, re, im;
+    char c1, c2;
+    row >> omega >> c1 >> re >> c2 >> im;
+    skewed_text << omega << ',' << re << ',' << 0.3 * std::abs(re) << '\n';
+  }
+  std::istringstream noisy(noisy_text.str()), skewed(skewed_text.str());
+  const SpectrumData d = parse_spectrum_csv(noisy, "noisy.csv");
+  int positive = 0;
+  for (int k = 0; k <= d.M; ++k) positive += d.at(0, 0, k).imag() > 0;
+  ASSERT_GT(positive, 0);  // the noisy file carries imaginary parts of both signs
+  ASSERT_LT(positive, d.M + 1);
+  try {
+    parse_spectrum_csv(skewed, "skewed.csv");
+    ADD_FAILURE() << "a diagonal with Im S = 0.3 |Re S| at every sample was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Input);
+    EXPECT_NE(std::string(e.what()).find("skewed.csv column S_im: the imaginary part of a diagonal entry has one sign"),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -298,9 +298,37 @@ namespace {
 // fewest any common tool prints) rounds each entry by <= 0.5e-5 of itself, and
 // |S_ab| <= sqrt(S_aa S_bb) for a positive semi-definite S (Cauchy-Schwarz),
 // so two entries equal before printing differ by <= 1e-5 sqrt(|S_aa| |S_bb|).
-// The diagonal is not tested: Akcay's (2011) Section 4 noise is complex, so
-// noisy diagonal samples carry an imaginary part by design.
+// The diagonal is real for a Hermitian S, but Akcay's (2011) Section 4 noise is
+// complex, so noisy diagonal samples carry an imaginary part by design; that
+// part is zero-mean and symmetric, and the default extension discards it. What
+// noise does not do is keep one sign at every sample: for independent noise
+// symmetric about 0, P(all N signs alike) = 2^(1−N), below 1e-11 at the
+// N >= 40 samples this test waits for (a sign test, exact for any symmetric
+// law). So a diagonal whose imaginary part has one sign at all N samples,
+// each above the printing floor 1e-5 |S_aa(k)| (rounding alone never trips
+// it), is refused: a cross-spectrum, or columns shifted, not an auto-spectrum.
+void check_real_diagonal(const SpectrumData& d, const std::string& name) {
+  if (d.M + 1 < 40) return;
+  for (int a = 0; a < d.m; ++a) {
+    int positive = 0, negative = 0;
+    for (int k = 0; k <= d.M; ++k) {
+      const cplx v = d.at(a, a, k);
+      if (std::abs(v.imag()) <= 1e-5 * std::abs(v)) continue;
+      (v.imag() > 0 ? positive : negative) += 1;
+    }
+    if (std::max(positive, negative) == d.M + 1) {
+      const std::string col = d.m == 1 ? "S_im" : "S" + std::to_string(a + 1) + std::to_string(a + 1) + "_im";
+      input_error(name + " column " + col,
+                  "the imaginary part of a diagonal entry has one sign at all " + std::to_string(d.M + 1) +
+                      " samples (each above 1e-5 of the entry): the diagonal of a power spectrum is real, and noise "
+                      "would change sign (p = 2^(1-N) for symmetric noise); give an auto-spectrum (" + col +
+                      " zero or noise), not a cross-spectrum, and check the column order");
+    }
+  }
+}
+
 void check_hermitian(const SpectrumData& d, const std::string& name) {
+  check_real_diagonal(d, name);
   for (int k = 0; k <= d.M; ++k)
     for (int a = 0; a < d.m; ++a)
       for (int b = a + 1; b < d.m; ++b) {
