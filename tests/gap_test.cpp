@@ -748,7 +748,9 @@ TEST(GapDiagnosis, TheGapsPeaksHoldHalfItsExcessAtTheResonance) {
   double held = 0;
   for (size_t i = 0; i < r.peaks.size(); ++i) {
     held += r.peaks[i].share;
-    if (i > 0) EXPECT_LE(r.peaks[i].share, r.peaks[i - 1].share);
+    if (i > 0) {
+      EXPECT_LE(r.peaks[i].share, r.peaks[i - 1].share);
+    }
   }
   EXPECT_GE(held, 0.5);
   EXPECT_LE(held, 1.0);
@@ -920,6 +922,18 @@ TEST(GapDiagnosis, RefusesWhatItCannotUse) {
   osc.C = Eigen::MatrixXd::Ones(1, 2);
   osc.D = Eigen::MatrixXd::Zero(1, 1);
   EXPECT_THROW(diagnose_gap(osc, rec, 1, meta), Error);
+  // A model with a pole outside the circle has no periodic steady state to
+  // compare (new-user review: gap diagnosed an --allow-unstable model where
+  // validate refused it); refused before any work, as validate does.
+  StateSpace unstable = g;
+  unstable.A *= 1.1 / spectral_radius(g);
+  try {
+    diagnose_gap(unstable, rec, 1, meta);
+    ADD_FAILURE() << "an unstable model was diagnosed";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.kind(), ErrorKind::Input);
+    EXPECT_NE(std::string(e.what()).find("unstable pole"), std::string::npos) << e.what();
+  }
   GapOptions o;
   o.alpha = 0;
   EXPECT_THROW(diagnose_gap(g, rec, 1, meta, o), Error);

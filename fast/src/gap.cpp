@@ -1287,6 +1287,10 @@ void check_inputs(const StateSpace& model, const Eigen::MatrixXd& record, int in
                 fmt(model.sample_time, 10) + " s differs from the record's " + fmt(meta.sample_time, 10) +
                     " s (meta \"sample_time\"): a discrete-time model holds for one sample period; resample or "
                     "re-identify it at the record's");
+  // The diagnosis compares the model's periodic steady state, G U line by
+  // line, with the record's: an unstable model has none (fdsid validate
+  // refuses it alike).
+  require_stable(model, "to compare with the record");
   if (!(options.alpha > 0 && options.alpha < 1 && options.effect_alpha > 0 && options.effect_alpha < 1 &&
         options.fdr > 0 && options.fdr < 1 && options.min_share >= 0 && options.min_share < 1))
     throw Error(ErrorKind::Input, "options", "levels must lie in (0, 1)");
@@ -2379,6 +2383,7 @@ void joint_test(const StateSpace& model, const Eigen::MatrixXd& record, const Re
 MultiGapReport diagnose_gap_outputs(const StateSpace& model, const Eigen::MatrixXd& record, int inputs,
                                     const RecordMeta& meta, const GapOptions& options) {
   validate(model);
+  require_stable(model, "to compare with the record");
   if (inputs != 1 || model.inputs() != 1)
     throw Error(ErrorKind::Input, inputs != 1 ? "data" : "model",
                 "the gap diagnosis takes one input (several outputs are diagnosed channel by channel); got " +

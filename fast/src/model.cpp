@@ -68,6 +68,17 @@ Eigen::VectorXcd poles(const StateSpace& m) {
   return sorted_by_modulus(std::move(v));
 }
 
+void require_stable(const StateSpace& m, const std::string& use) {
+  const Eigen::VectorXcd lambda = poles(m);
+  for (Eigen::Index i = 0; i < lambda.size(); ++i) {
+    const bool stable = m.domain == Domain::Discrete ? std::abs(lambda(i)) < 1 : lambda(i).real() < 0;
+    if (!stable)
+      throw Error(ErrorKind::Input, "model",
+                  "has an unstable pole " + pole_text(lambda(i)) + ": an unstable model has no periodic steady state " +
+                      use + " (identify with the default reflection of unstable poles, not --allow-unstable)");
+  }
+}
+
 double spectral_radius(const StateSpace& m) {
   const Eigen::VectorXcd p = poles(m);
   return p.size() ? p.cwiseAbs().maxCoeff() : 0.0;

@@ -60,14 +60,7 @@ RecordFit fit_on_record(const StateSpace& model, const Records& records) {
   if (model.domain == Domain::Discrete && std::abs(model.sample_time - meta.sample_time) > 1e-5 * meta.sample_time)
     throw Error(ErrorKind::Input, "model field \"sample_time\"",
                 fmt(model.sample_time, 10) + " differs from the record's " + fmt(meta.sample_time, 10));
-  const Eigen::VectorXcd lambda = poles(model);
-  for (Eigen::Index i = 0; i < lambda.size(); ++i) {
-    const bool stable = model.domain == Domain::Discrete ? std::abs(lambda(i)) < 1 : lambda(i).real() < 0;
-    if (!stable)
-      throw Error(ErrorKind::Input, "model",
-                  "has an unstable pole " + fmt(lambda(i).real(), 6) + (lambda(i).imag() < 0 ? "" : "+") +
-                      fmt(lambda(i).imag(), 6) + "i: an unstable model has no periodic steady state to compare");
-  }
+  require_stable(model, "to compare");
   if (records.samples.rows() != static_cast<Eigen::Index>(P) * M)
     throw Error(ErrorKind::Input, "record",
                 "has " + std::to_string(records.samples.rows()) + " samples, not P M = " + std::to_string(P * M));

@@ -43,6 +43,12 @@ Eigen::VectorXcd poles(const StateSpace& model);
 /// A pole as text, "re+imj" / "re-imj" with 6 significant digits each (warnings, notes).
 std::string pole_text(cplx z);
 
+/// Throws Error(Input) naming the first unstable pole (discrete: |z| >= 1;
+/// continuous: Re s >= 0) when the model is not stable: an unstable model has
+/// no periodic steady state, and `use` says what needed one ("to compare",
+/// "to record", ...).
+void require_stable(const StateSpace& model, const std::string& use);
+
 /// The largest pole modulus, max |λ_i(A)| (0 for order 0); a discrete-time
 /// model is stable when it is < 1.
 double spectral_radius(const StateSpace& model);
