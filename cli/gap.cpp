@@ -109,9 +109,18 @@ std::string verdict_line(const GapReport& r) {
   switch (r.verdict) {
     case GapVerdict::NoGap:
       return "verdict: no significant gap (p(gap) " + p_text(r.p_gap) + " at level " + fmt(alpha, 3) + ": noise alone)";
-    case GapVerdict::Explained:
-      return "verdict: " + effects + " - explained: what remains is noise (p " + p_text(r.p_after) + " at level " +
-             fmt(alpha, 3) + ")";
+    case GapVerdict::Explained: {
+      std::string line = "verdict: " + effects + " - explained: what remains is noise (p " + p_text(r.p_after) +
+                         " at level " + fmt(alpha, 3) + ")";
+      // Two reasons to read "explained" with care, each from its own numbers.
+      for (Effect e : r.stand_ins)
+        line += "; but " + std::string(fdsid::to_string(e)) +
+                " is a stand-in (note below): the data do not resolve its form, only its shrink";
+      if (r.p_below < alpha)
+        line += "; and what remains (gap " + sci(r.gap_after) + ") is below the noise (p " + p_text(r.p_below) +
+                " of so small a gap from noise): the effects fit part of the noise too, more than the data support";
+      return line;
+    }
     case GapVerdict::Unexplained: break;
   }
   if (r.present.empty()) {
@@ -332,6 +341,8 @@ int run_gap_validate(const GapValidateCommand& given) {
       << " cases, " << v.false_alarms_dependent_noted << " of the " << v.false_alarms << " false alarms\n";
   out << "  stand-ins named (a mode effect at its search's bound): " << v.stand_in_noted << " of " << v.cases
       << " cases, " << v.stand_in_correct << " of them correct verdicts\n";
+  out << "  gap after below the noise (the effects fitted noise too): " << v.below_noise << " of " << v.cases
+      << " cases, " << v.below_noise_correct << " of them correct verdicts\n";
   out << "confusion (truth -> verdict: count):\n";
   for (const auto& t : v.confusion)
     for (const auto& p : t.second)

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <cmath>
 #include <functional>
@@ -640,6 +641,34 @@ GapReport diagnose_case(std::vector<Effect> effects, Strength strength, std::uin
 // The level: 20 effect-free generated cases (M = 8, P = 512, coloured noise
 // of the generator's random filters, SNR 20–60 dB): under the null the count
 // below alpha = 0.01 is Binomial(20, ≤ 0.01), P(≥ 3) = 0.001; allowed 2.
+// p_below, the lower tail of the gap test on what remains: Fisher's X over
+// the excited lines (each −2 ln p of t ~ F(2, 2M−2), M the periods used)
+// against χ² with 2K − q degrees, q the chosen effects' parameters. Computed
+// here from the report's own t_after: the tail's direction and the q
+// subtracted are what a mutant would get wrong. Two correct verdicts: a clear
+// gain error (what remains is noise: p_below not small) and classic seed 2
+// case 75, subtle leakage, whose remaining gap 0.30 is below the noise
+// (flagged at p ≈ 5e-10 in the validation runs; leakage cases hold the
+// smallest p_below there, why is not established).
+TEST(GapDiagnosis, AGapBelowTheNoiseIsTheLowerTailOfTheGapTest) {
+  for (const auto& [effect, strength, seed] :
+       {std::tuple{Effect::GainError, Strength::Clear, std::uint64_t{3}},
+        std::tuple{Effect::Leakage, Strength::Subtle, std::uint64_t{2000081}}}) {
+    const GapReport r = diagnose_case({effect}, strength, seed);
+    SCOPED_TRACE(verdict(r));
+    ASSERT_EQ(r.verdict, GapVerdict::Explained);
+    int q = 0;
+    for (const EffectFit& f : r.chosen) q += f.dof;
+    const int M = r.periods_used, K = static_cast<int>(r.t_after.size());
+    double X = 0;
+    for (double t : r.t_after) X += 2.0 * (M - 1) * std::log1p(t / (M - 1));
+    const double expected = boost::math::cdf(boost::math::chi_squared(2.0 * K - q), X);
+    EXPECT_NEAR(r.p_below, expected, 1e-12 + 1e-9 * expected);
+    if (effect == Effect::GainError) EXPECT_GT(r.p_below, r.options.alpha) << r.gap_after;
+    if (effect == Effect::Leakage) EXPECT_LT(r.p_below, 1e-6) << r.gap_after;
+  }
+}
+
 TEST(GapDiagnosis, ASubtleTransientInColouredNoiseIsLeakage) {
   for (std::uint64_t seed : {2000021u, 2000081u}) {
     const GapReport r = diagnose_case({Effect::Leakage}, Strength::Subtle, seed);

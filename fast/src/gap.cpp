@@ -294,11 +294,29 @@ double gap_of(const LineStats& st) { return (st.M - 2.0) / (st.M - 1.0) * st.t.m
 
 // Fisher's combination of the per-line p-values p = (1 + t/(M−1))^{−(M−1)}:
 // −2 Σ ln p = 2 (M−1) Σ ln(1 + t/(M−1)) ~ χ²_{2K} under the null.
-double fisher_p(const Eigen::VectorXd& t, int M) {
-  if (t.size() == 0) return 1.0;
+// Fisher's statistic X = Σ −2 ln p_i over lines whose t ~ F(2, 2M−2):
+// P(F > t) = (1 + t/(M−1))^−(M−1), so −2 ln p_i = 2(M−1) ln(1 + t/(M−1)) ~ χ²₂.
+double fisher_statistic(const Eigen::VectorXd& t, int M) {
   double X = 0;
   for (double v : t) X += 2.0 * (M - 1) * std::log1p(v / (M - 1));
-  return boost::math::cdf(boost::math::complement(boost::math::chi_squared(2.0 * t.size()), X));
+  return X;
+}
+
+double fisher_p(const Eigen::VectorXd& t, int M) {
+  if (t.size() == 0) return 1.0;
+  return boost::math::cdf(boost::math::complement(boost::math::chi_squared(2.0 * t.size()), fisher_statistic(t, M)));
+}
+
+// The lower tail: P(X ≤ observed) when q real parameters were fitted to the
+// 2K real residual components. A least-squares fit of q parameters removes
+// about q χ²₁ terms from the sum (exactly so for a linear fit of the
+// residuals; X's terms are ln(1 + t/(M−1)), ≈ t/(M−1) for the small t a fit
+// leaves, so the same count), hence χ² with 2K − q degrees of freedom: with
+// fewer degrees the tail is smaller, so the test errs towards not flagging.
+double fisher_p_below(const Eigen::VectorXd& t, int M, int q) {
+  const double dof = 2.0 * static_cast<double>(t.size()) - q;
+  if (t.size() == 0 || !(dof > 0)) return 1.0;
+  return boost::math::cdf(boost::math::chi_squared(dof), fisher_statistic(t, M));
 }
 
 // The leakage test of period l against the mean of periods l+1 … M−1 (see gap.hpp).
@@ -2055,6 +2073,9 @@ void conclude(const Spectra& s, const LineStats& st0, const Augment& a0, const A
   // (q of them against 2K residuals) absorb a little noise, so under a right
   // augmented model this p-value is, if anything, conservative.
   rep.p_after = rep.present.empty() ? rep.p_gap : fisher_p(st1.t, st1.M);
+  int fitted = 0;
+  for (const EffectFit& f : rep.chosen) fitted += f.dof;
+  rep.p_below = rep.present.empty() ? 1.0 : fisher_p_below(st1.t, st1.M, fitted);
   // The excess gap the present effects are asked to remove: gap_before, or
   // the model's gap on the steady-state periods when dropping a transient
   // revealed more misfit than the transient's scatter let gap_before show.
@@ -2268,6 +2289,7 @@ nlohmann::json gap_report_to_json(const GapReport& r) {
   for (const auto& p : r.peaks) j["peaks"].push_back({{"band", {p.band[0], p.band[1]}}, {"share", p.share}});
   j["verdict"] = to_string(r.verdict);
   j["p_after"] = r.p_after;
+  j["p_below"] = r.p_below;
   j["explained_share"] = r.explained_share;
   j["steps"] = nlohmann::json::array();
   for (const SelectionStep& st : r.path) {

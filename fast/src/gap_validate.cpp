@@ -110,6 +110,7 @@ GapValidationCase run_case(const GapValidationOptions& o, int i, const std::file
     r.p_period_independence = rep.p_period_independence;
     r.periods_dependent_noted = rep.periods_dependent();
     r.stand_ins = static_cast<int>(rep.stand_ins.size());
+    r.p_below = rep.p_below;
     const double Ts = meta.sample_time;
     for (const auto& tb : c.bands) {  // truth in cycles/sample, report in Hz
       bool hit = false;
@@ -186,6 +187,9 @@ GapValidation validate_gap(const GapValidationOptions& o) {
     v.periods_dependent_noted += r.periods_dependent_noted;
     v.stand_in_noted += r.stand_ins > 0;
     v.stand_in_correct += r.stand_ins > 0 && r.correct;
+    const bool below = r.p_below < o.gap.alpha;
+    v.below_noise += below;
+    v.below_noise_correct += below && r.correct;
     if (r.category == "none") {
       ++none;
       alarms += r.verdict != "none";
@@ -264,6 +268,7 @@ nlohmann::json gap_validation_to_json(const GapValidation& v) {
   j["periods_dependent_noted"] = {{"cases", v.periods_dependent_noted},
                                   {"false_alarms", v.false_alarms_dependent_noted}};
   j["stand_in_noted"] = {{"cases", v.stand_in_noted}, {"correct", v.stand_in_correct}};
+  j["below_noise"] = {{"cases", v.below_noise}, {"correct", v.below_noise_correct}};
   const auto& g = v.gap_after_correct;
   auto q = [&](double p) { return g.empty() ? NAN : g[static_cast<size_t>(p * (g.size() - 1))]; };
   j["gap_after_correct"] = {{"n", g.size()},     {"median", q(0.5)}, {"p90", q(0.9)},
@@ -281,7 +286,7 @@ nlohmann::json gap_validation_to_json(const GapValidation& v) {
                           {"bands_hit", r.bands_hit}, {"correct_up_to_alternatives", r.correct_up_to_alternatives},
                           {"named_alternatives", r.named_alternatives},
                           {"p_period_power", r.p_period_power}, {"p_period_independence", r.p_period_independence},
-                          {"stand_ins", r.stand_ins}};
+                          {"stand_ins", r.stand_ins}, {"p_below", r.p_below}};
     if (!r.error.empty()) row["error"] = r.error;
     j["rows"].push_back(row);
   }

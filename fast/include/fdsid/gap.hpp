@@ -225,6 +225,13 @@ struct GapReport {
   /// The gap test (Fisher's combination over the excited lines) on what
   /// remains after the present effects; p_gap when none is present.
   double p_after = 1;
+  /// The other tail of the same statistic: the chance that noise alone, less
+  /// the q real parameters the present effects fitted, leaves a gap as small
+  /// as gap_after (Fisher's X against χ² with 2K − q degrees of freedom, K
+  /// excited lines); 1 when none is present. Below the level, the effects
+  /// fit part of the noise too: more flexible than the data support (a
+  /// note says so; the verdict line names it).
+  double p_below = 1;
   /// Share of the excess gap the present effects remove:
   /// (g − gap_after) / (g − 1) with g = max(gap_before, gap_model_used); 0
   /// when none is present.

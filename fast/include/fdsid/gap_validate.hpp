@@ -74,6 +74,8 @@ struct GapValidationCase {
   bool periods_dependent_noted = false;
   /// Chosen mode effects the report names stand-ins (GapReport::stand_ins).
   int stand_ins = 0;
+  /// GapReport::p_below: what remains is below the noise when < the level.
+  double p_below = 1;
   std::string error;      ///< the diagnosis refused the case (counted as wrong)
 };
 
@@ -94,6 +96,9 @@ struct GapValidation {
   /// Cases whose report names a stand-in (GapReport::stand_ins), and how many
   /// of them are correct verdicts (a stand-in there is a false note).
   int stand_in_noted = 0, stand_in_correct = 0;
+  /// Cases whose remaining gap lies below the noise (p_below under the
+  /// level: the effects fitted noise too), and how many are correct verdicts.
+  int below_noise = 0, below_noise_correct = 0;
   std::vector<double> gap_after_correct;  ///< sorted, correct verdicts with effects
   std::vector<GapValidationCase> rows;
   std::vector<std::string> noise_sources;  ///< measured noise's records (empty: synthetic noise)
