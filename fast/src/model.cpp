@@ -68,11 +68,14 @@ Eigen::VectorXcd poles(const StateSpace& m) {
   return sorted_by_modulus(std::move(v));
 }
 
+bool unstable_pole(Domain domain, cplx pole) {
+  return domain == Domain::Discrete ? std::abs(pole) >= 1 : pole.real() >= 0;
+}
+
 void require_stable(const StateSpace& m, const std::string& use) {
   const Eigen::VectorXcd lambda = poles(m);
   for (Eigen::Index i = 0; i < lambda.size(); ++i) {
-    const bool stable = m.domain == Domain::Discrete ? std::abs(lambda(i)) < 1 : lambda(i).real() < 0;
-    if (!stable)
+    if (unstable_pole(m.domain, lambda(i)))
       throw Error(ErrorKind::Input, "model",
                   "has an unstable pole " + pole_text(lambda(i)) + ": an unstable model has no periodic steady state " +
                       use + " (identify with the default reflection of unstable poles, not --allow-unstable)");

@@ -104,8 +104,6 @@ cplx mode_pole(const Eigen::MatrixXd& A, int s, int z) {
   return z == 1 ? cplx(A(s, s), 0) : cplx(A(s, s), A(s, s + 1));
 }
 
-bool unstable(Domain d, cplx pole) { return d == Domain::Discrete ? std::abs(pole) >= 1 : pole.real() >= 0; }
-
 /// Layout of θ: per mode its pole parameters (1, or 2: (a, b) continuous,
 /// (ρ, φ) discrete), B_i row-major (z × m), C_i column-major (p × z); then
 /// D column-major (p × m). Continuous time in s̃ = s/ω_s: Ã = A/ω_s, B̃ = B/ω_s.
@@ -485,14 +483,14 @@ bool on_stability_bound(const Layout& lay, const Eigen::VectorXd& th, size_t i) 
 StateSpace reflect_unstable_poles(const FrfData& data, const StateSpace& model, std::vector<cplx>* reflected) {
   const Eigen::VectorXcd lam = poles(model);
   bool any = false;
-  for (Eigen::Index i = 0; i < lam.size(); ++i) any = any || unstable(model.domain, lam(i));
+  for (Eigen::Index i = 0; i < lam.size(); ++i) any = any || unstable_pole(model.domain, lam(i));
   if (!any) return model;
   Modal md = modal_form(model);
   const double ws = omega_scale(data);
   for (int i = 0, s = 0; i < static_cast<int>(md.sizes.size()); s += md.sizes[i], ++i) {
     const int z = md.sizes[i];
     const cplx pole = mode_pole(md.model.A, s, z);
-    if (!unstable(model.domain, pole)) continue;
+    if (!unstable_pole(model.domain, pole)) continue;
     if (reflected) reflected->push_back(pole);
     Eigen::Block<Eigen::MatrixXd> a = md.model.A.block(s, s, z, z);
     if (model.domain == Domain::Continuous) {  // s → −s̄: the real part changes sign (and leaves the margin)

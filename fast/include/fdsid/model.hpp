@@ -43,6 +43,9 @@ Eigen::VectorXcd poles(const StateSpace& model);
 /// A pole as text, "re+imj" / "re-imj" with 6 significant digits each (warnings, notes).
 std::string pole_text(cplx z);
 
+/// Whether a pole is unstable: discrete |z| >= 1, continuous Re s >= 0.
+bool unstable_pole(Domain domain, cplx pole);
+
 /// Throws Error(Input) naming the first unstable pole (discrete: |z| >= 1;
 /// continuous: Re s >= 0) when the model is not stable: an unstable model has
 /// no periodic steady state, and `use` says what needed one ("to compare",
