@@ -664,8 +664,11 @@ TEST(GapDiagnosis, AGapBelowTheNoiseIsTheLowerTailOfTheGapTest) {
     for (double t : r.t_after) X += 2.0 * (M - 1) * std::log1p(t / (M - 1));
     const double expected = boost::math::cdf(boost::math::chi_squared(2.0 * K - q), X);
     EXPECT_NEAR(r.p_below, expected, 1e-12 + 1e-9 * expected);
-    if (effect == Effect::GainError) EXPECT_GT(r.p_below, r.options.alpha) << r.gap_after;
-    if (effect == Effect::Leakage) EXPECT_LT(r.p_below, 1e-6) << r.gap_after;
+    if (effect == Effect::GainError) {
+      EXPECT_GT(r.p_below, r.options.alpha) << r.gap_after;
+    } else {
+      EXPECT_LT(r.p_below, 1e-6) << r.gap_after;
+    }
   }
 }
 

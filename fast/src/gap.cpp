@@ -292,10 +292,9 @@ LineStats line_stats(const Spectra& s, const Augment& a, const std::vector<int>&
 
 double gap_of(const LineStats& st) { return (st.M - 2.0) / (st.M - 1.0) * st.t.mean(); }
 
-// Fisher's combination of the per-line p-values p = (1 + t/(M−1))^{−(M−1)}:
-// −2 Σ ln p = 2 (M−1) Σ ln(1 + t/(M−1)) ~ χ²_{2K} under the null.
-// Fisher's statistic X = Σ −2 ln p_i over lines whose t ~ F(2, 2M−2):
-// P(F > t) = (1 + t/(M−1))^−(M−1), so −2 ln p_i = 2(M−1) ln(1 + t/(M−1)) ~ χ²₂.
+// Fisher's combination of the per-line p-values p = (1 + t/(M−1))^{−(M−1)}
+// (t ~ F(2, 2M−2)): X = −2 Σ ln p = 2 (M−1) Σ ln(1 + t/(M−1)) ~ χ²_{2K}
+// under the null; fisher_p is its upper tail.
 double fisher_statistic(const Eigen::VectorXd& t, int M) {
   double X = 0;
   for (double v : t) X += 2.0 * (M - 1) * std::log1p(v / (M - 1));

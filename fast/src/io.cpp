@@ -291,13 +291,6 @@ nlohmann::json result_to_json(const SpectrumResult& r) {
 }
 
 namespace {
-// A power spectrum is Hermitian, S_ba = conj(S_ab), at every sample (a
-// cross-spectrum estimate from data is so by construction); with the sign of
-// one _im column flipped the algorithm would still run and return twice the
-// order. Tolerance: a writer printing d >= 6 significant digits (C's %g, the
-// fewest any common tool prints) rounds each entry by <= 0.5e-5 of itself, and
-// |S_ab| <= sqrt(S_aa S_bb) for a positive semi-definite S (Cauchy-Schwarz),
-// so two entries equal before printing differ by <= 1e-5 sqrt(|S_aa| |S_bb|).
 // The diagonal is real for a Hermitian S, but Akcay's (2011) Section 4 noise is
 // complex, so noisy diagonal samples carry an imaginary part by design; that
 // part is zero-mean and symmetric, and the default extension discards it. What
@@ -327,6 +320,13 @@ void check_real_diagonal(const SpectrumData& d, const std::string& name) {
   }
 }
 
+// A power spectrum is Hermitian, S_ba = conj(S_ab), at every sample (a
+// cross-spectrum estimate from data is so by construction); with the sign of
+// one _im column flipped the algorithm would still run and return twice the
+// order. Tolerance: a writer printing d >= 6 significant digits (C's %g, the
+// fewest any common tool prints) rounds each entry by <= 0.5e-5 of itself, and
+// |S_ab| <= sqrt(S_aa S_bb) for a positive semi-definite S (Cauchy-Schwarz),
+// so two entries equal before printing differ by <= 1e-5 sqrt(|S_aa| |S_bb|).
 void check_hermitian(const SpectrumData& d, const std::string& name) {
   check_real_diagonal(d, name);
   for (int k = 0; k <= d.M; ++k)

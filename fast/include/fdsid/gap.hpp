@@ -229,8 +229,8 @@ struct GapReport {
   /// the q real parameters the present effects fitted, leaves a gap as small
   /// as gap_after (Fisher's X against χ² with 2K − q degrees of freedom, K
   /// excited lines); 1 when none is present. Below the level, the effects
-  /// fit part of the noise too: more flexible than the data support (a
-  /// note says so; the verdict line names it).
+  /// fit part of the noise too: more flexible than the data support (the
+  /// verdict line of an explained gap says so).
   double p_below = 1;
   /// Share of the excess gap the present effects remove:
   /// (g − gap_after) / (g − 1) with g = max(gap_before, gap_model_used); 0
