@@ -157,6 +157,7 @@ void add_frequency_unit_options(CLI::App* sub, FrequencyUnits& units) {
                   "unit of the FRF file's omega column: rad (default; rad/sample, or rad/s with --sample-time or "
                   "--domain continuous) or hz (cycles/sample, or Hz with --sample-time or --domain continuous)")
       ->transform(choice(std::map<std::string, bool>{{"rad", false}, {"hz", true}}, "is neither rad nor hz"))
+      ->each([&units](const std::string&) { units.unit_given = true; })
       ->type_name("UNIT");
   sub->add_option("--sample-time", units.sample_time_text,
                   "discrete time: the FRF's omega column is per second and Ts (s) the sample time (omega x Ts in "

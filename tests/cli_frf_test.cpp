@@ -1412,12 +1412,35 @@ TEST_F(CliFrf, FrfFileInHzOrRadPerSecondWithASampleTime) {
     expect_exact_poles(pintelon_plant(), j);
     EXPECT_EQ(j["sample_time"].get<double>(), Ts);
     EXPECT_EQ(j["source"]["sample_time"], "0.0025");
-    EXPECT_EQ(j["source"].contains("frequency_unit"), unit == "hz");
+    EXPECT_EQ(j["source"]["frequency_unit"], unit);  // as given, so that check reads it the same way
     const RunResult c = run_fdsid({"check", "--model", path(out), "--frf", file}, 600);
     EXPECT_EQ(c.status, 0) << describe(c);
   }
   EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f_hz, "--order", "4"}),
                          {"rad/sample is outside [0, pi]", "--frequency-unit", "--sample-time"}));
+  // Review finding 3 of stop 47: the odd lines of a period P = 128 in cycles/sample, (2k + 1)/128 up to
+  // 63/128, lie below 1/2 < pi, so the Nyquist check cannot see them; the grid k/P can. --frequency-unit
+  // hz reads them as the plant (the same exact poles); --frequency-unit rad reads them as written, and
+  // says so in "source".
+  std::vector<double> odd_lines;
+  for (int k = 0; k < 32; ++k) odd_lines.push_back(2 * M_PI * (2 * k + 1) / 128);
+  std::istringstream rows(frf_csv(pintelon_plant(), odd_lines, 1e-6));
+  std::string cycles;
+  std::getline(rows, cycles);
+  cycles += "\n";
+  for (int k = 0; std::getline(rows, line); ++k) {
+    std::snprintf(buf, sizeof buf, "%.17g", (2 * k + 1) / 128.0);
+    cycles += buf + line.substr(line.find(',')) + "\n";
+  }
+  const std::string f_cycles = write("g_cycles.csv", cycles);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f_cycles, "--order", "4"}),
+                         {"k/128", "cycles/sample", "--frequency-unit hz", "--frequency-unit rad"}));
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--frf", f_cycles, "--frequency-unit", "hz", "--order", "4",
+                                   "--r", "8", "--json", path("m_cycles.json")})));
+  expect_exact_poles(pintelon_plant(), read_json("m_cycles.json"));
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--frf", f_cycles, "--frequency-unit", "rad", "--order", "4",
+                                   "--r", "8", "--json", path("m_said_rad.json")})));
+  EXPECT_EQ(read_json("m_said_rad.json")["source"]["frequency_unit"], "rad");
   // Hz without a sample time is cycles/sample: 400 Hz read so lies above the Nyquist frequency.
   EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", f_hz, "--frequency-unit", "hz", "--order", "4"}),
                          {"cycles/sample", "above the Nyquist frequency"}));
@@ -1563,6 +1586,8 @@ TEST_F(CliFrf, RefineAndUsePeriodsRefusals) {
   // the F = 16 excited lines of P = 64, less those Eq. (34) dropped
   EXPECT_EQ(f["terms"].get<int>() + j["source"]["errors_in_variables"]["dropped_lines"].get<int>(), 16);
   EXPECT_EQ(f["magnitude_sd"].size(), static_cast<size_t>(f["terms"].get<int>()));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", path("eiv.json"), "--data", d, "--meta", m}),
+                         {"field \"refinement\"", "--refine ml optimum", "without --refine"}));
   for (const json& row : j["poles"]) EXPECT_LT(std::hypot(row[0].get<double>(), row[1].get<double>()), 1.0);
   EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", d, "--meta", m, "--skip-periods", "2", "--use-periods", "5"}),
                          {"--use-periods", "4 periods that remain"}));
@@ -1584,9 +1609,15 @@ TEST_F(CliFrf, UnstablePolesAreReflectedUnlessAllowed) {
   EXPECT_NE(r.out.find("note: unstable subspace pole(s) 1.25+0j reflected"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find("the identified model is unstable"), std::string::npos) << r.out;
   EXPECT_NEAR(read_json("s.json")["poles"][0][0].get<double>(), 0.8, 1e-9);
+  // Review finding 1 of stop 47: the reference repeats the subspace estimate, not the reflection, so check
+  // refuses the reflected model by name (it DISAGREED, unexplained) and checks the --allow-unstable one.
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", path("s.json"), "--frf", f}),
+                         {"field \"stabilised\"", "reflected", "--allow-unstable"}));
   const RunResult a = run_fdsid({"identify-frf", "--frf", f, "--order", "1", "--r", "3", "--allow-unstable", "--json",
                                  path("a.json")});
   ASSERT_TRUE(Succeeded(a)) << a.err;
   EXPECT_NE(a.out.find("warning: the identified model is unstable: pole 1.25+0j"), std::string::npos) << a.out;
   EXPECT_NEAR(read_json("a.json")["poles"][0][0].get<double>(), 1.25, 1e-9);
+  const RunResult c = run_fdsid({"check", "--model", path("a.json"), "--frf", f}, 600);
+  EXPECT_EQ(c.status, 0) << describe(c);
 }

@@ -26,7 +26,7 @@ json to_json(const FrfSource& s) {
   json j;
   if (!s.frf_path.empty()) {
     j = {{"frf", s.frf_path}, {"variance", s.known_variance ? "G_var column (known)" : "none (unit weights)"}};
-    if (s.units.hz) j["frequency_unit"] = "hz";
+    if (s.units.hz || s.units.unit_given) j["frequency_unit"] = s.units.hz ? "hz" : "rad";
     if (s.units.sample_time > 0) j["sample_time"] = s.units.sample_time_text;
     return j;
   }

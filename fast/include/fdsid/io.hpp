@@ -50,6 +50,7 @@ struct FrequencyUnits {
   bool hz = false;
   double sample_time = 0;        ///< Ts in seconds; 0: not given
   std::string sample_time_text;  ///< Ts as the user wrote it (the reference reads it exactly)
+  bool unit_given = false;       ///< --frequency-unit was written (rad given so silences the cycles/sample guard)
   bool is_default() const { return !hz && sample_time == 0; }
   /// The factor that takes the column to rad/sample (discrete) or rad/s
   /// (continuous): (hz ? 2π : 1) × (discrete and Ts given ? Ts : 1).
@@ -60,7 +61,10 @@ struct FrequencyUnits {
 /// Purpose: an FRF file whose omega column is in `units`; the data's omega in
 /// the format's unit and, with a sample time, data.sample_time = Ts.
 /// Fails: as read_frf_csv; a frequency outside [0, π] rad/sample after the
-/// conversion names the column's value, its unit and the Nyquist frequency.
+/// conversion names the column's value, its unit and the Nyquist frequency;
+/// with no unit given, a discrete-time column on a DFT grid k/P no higher than
+/// 1/2 (cycles/sample written where rad/sample is read) names the grid and both
+/// ways out (--frequency-unit hz, or rad when it is rad/sample).
 FrfData read_frf_csv(const std::string& path, Domain domain, const FrequencyUnits& units);
 /// Refuses units where they mean nothing (Error(Input) naming the option):
 /// for records (`from_frf` false: their meta has Ts) or for spectra, and a
