@@ -387,12 +387,20 @@ struct ObservabilityEstimate {
 // K = L⁻¹(𝐘^reΠ)(𝐘^reΠ)ᵀL⁻ᵀ = UΣ²Uᵀ (JacobiSVD, full U), Σ = √ of its
 // singular values. Numerical aspects: forming K squares the condition, so
 // singular values below ≈ √u σ_1 are not resolved; the leading n singular
-// vectors are. Fails: StepError(1) when C_Y is not positive definite.
+// vectors are. Fails: StepError(1) when C_Y is not positive definite. Too
+// few frequencies (2F < r columns) are refused by step 1b before this, so the
+// cause here is numerical: the r basis rows at the data's frequencies are
+// dependent to the working precision (review finding 6 of stop 47: the F-16's
+// 267 lines, a bilinear basis at r = 48 on a band covering ~28 % of the unit
+// circle, were reported as "too few frequencies").
 // References: Pintelon (2002) step 1c; McKelvey et al. (1996).
 ObservabilityEstimate step1c_noise_weighted_svd(const MatrixR& C_Y, const MatrixR& YPi, int n) {
   Eigen::LLT<MatrixR> llt_c(C_Y);
   if (llt_c.info() != Eigen::Success)
-    throw StepError(1, "C_Y is not positive definite (too few frequencies for r)");
+    throw StepError(1, "C_Y (" + std::to_string(C_Y.rows()) + " x " + std::to_string(C_Y.rows()) +
+                           ") is singular to " + std::to_string(std::numeric_limits<Real>::digits10) +
+                           " digits (Cholesky fails): the r basis rows are numerically dependent on the data's "
+                           "frequencies (r too large for the band); a smaller --r");
   const MatrixR L = llt_c.matrixL();
   const MatrixR M1 = llt_c.matrixL().solve(YPi);
   const MatrixR K = M1 * M1.transpose();
