@@ -118,7 +118,7 @@ nlohmann::json refinement_json(const RefineResult& r, const RefineOptions& o) {
   if (noise != RefineNoise::None) {
     j["expected_cost"] = r.expected_cost;
     j["p_value"] = r.p_value;
-    j["p_value_method"] = r.p_is_bound ? "Cantelli bound on the sample-variance law" : "chi-square(2T - q) tail";
+    j["p_value_method"] = "chi-square(2T - q) tail of Fisher's combination of the terms (2V for known variances)";
   }
   j["reflected_poles"] = json::array();
   for (const cplx z : r.reflected) j["reflected_poles"].push_back({z.real(), z.imag()});
@@ -159,8 +159,7 @@ void print_refinement(Out& out, const RefineResult& r, const RefineOptions& o, D
       << sci(r.cost)
       << " in " << r.iterations << " iterations";
   if (noise != RefineNoise::None)
-    out << "; expected " << fmt(r.expected_cost, 5) << " under a right model, p " << (r.p_is_bound ? "<= " : "= ")
-        << sci(r.p_value, 2);
+    out << "; expected " << fmt(r.expected_cost, 5) << " under a right model, p = " << sci(r.p_value, 2);
   out << "\n";
   const std::string unit = domain == Domain::Continuous || sample_time != 1.0 ? "rad/s" : "rad/sample";
   for (const PoleUncertainty& p : r.poles) {
@@ -354,7 +353,8 @@ int run(const IdentifyFrfCommand& c) {
   print_poles(out, res.poles);
   if (!stabilised.empty()) out << "note: " << stabilised << "\n";
   if (c.refine) print_refinement(out, refined, ro, res.model.domain, res.model.sample_time);
-  const FitVerdict fit = fit_verdict(res, data, source);
+  FitVerdict fit = fit_verdict(res, data, source);
+  fit.refined = c.refine;
   if (fit.misfit) res.warnings.push_back(fit.warning());
   out << fit.summary() << "\n";
   if (c.improper) out << "the model is the inverse system 1/G (improper G, Pintelon 2002 Section 5)\n";

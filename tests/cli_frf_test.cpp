@@ -1010,9 +1010,13 @@ TEST_F(CliFrf, CheckCatchesTheClassicMistakes) {
     const RunResult r = run_fdsid(args);
     expect_verdict(r, false, read_json("verdict.json"));
   };
-  // A conjugated FRF (the e^{+jwt} convention): the same |G|, the phase mirrored.
+  // A conjugated FRF (the e^{+jwt} convention): the same |G|, the phase mirrored. Its subspace poles lie
+  // outside the unit circle; the mistaken implementation keeps them (fdsid's reflection, which check
+  // refuses by name, is not the mistake under test).
   expect_disagrees("conjugated FRF",
-                   candidate("conj.json", write("conj.csv", noisy_frf_csv(pintelon_plant(), wd, 1e-2, true)), {}), d);
+                   candidate("conj.json", write("conj.csv", noisy_frf_csv(pintelon_plant(), wd, 1e-2, true)),
+                             {"--allow-unstable"}),
+                   d);
   // Unweighted steps: the G_var column ignored (unit weights).
   expect_disagrees("unweighted",
                    candidate("unw.json", write("unw.csv", noisy_frf_csv(pintelon_plant(), wd, 1e-2, false, 0, false)), {}),

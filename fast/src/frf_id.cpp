@@ -707,17 +707,34 @@ Eigen::VectorXcd frequency_response(const StateSpace& model, const Eigen::Vector
   return g;
 }
 
-double v_sub(const StateSpace& model, const FrfData& d) {
+namespace {
+// Visits the weighted residuals |Y − G U|²/σ² of frequency k as a p × c array.
+template <class Visit>
+void for_each_weighted_residual(const StateSpace& model, const FrfData& d, Visit visit) {
   ResponseAt response(model);
   Eigen::MatrixXcd G, e;
-  double v = 0;
   for (int k = 0; k < d.frequencies(); ++k) {
     response(d.omega(k), G);
     e = d.Y[k];
     e.noalias() -= G * d.U[k];
-    v += (e.cwiseAbs2().array() / d.variance[k].array()).sum();
+    visit(k, e.cwiseAbs2().array() / d.variance[k].array());
   }
+}
+}  // namespace
+
+double v_sub(const StateSpace& model, const FrfData& d) {
+  double v = 0;
+  for_each_weighted_residual(model, d, [&v](int, const auto& t) { v += t.sum(); });
   return v;
+}
+
+Eigen::VectorXd v_sub_terms(const StateSpace& model, const FrfData& d) {
+  const Eigen::Index block = static_cast<Eigen::Index>(d.outputs()) * d.columns();
+  Eigen::VectorXd terms(d.frequencies() * block);
+  for_each_weighted_residual(model, d, [&](int k, const auto& t) {
+    terms.segment(k * block, block) = Eigen::Map<const Eigen::VectorXd>(Eigen::ArrayXXd(t).data(), block);
+  });
+  return terms;
 }
 
 StateSpace bilinear_to_continuous(const StateSpace& w, double omega_scale) {

@@ -24,6 +24,7 @@
 #include "numerics/complex.hpp"
 #include "numerics/constants.hpp"
 #include "numerics/fft.hpp"
+#include "numerics/fisher.hpp"
 #include "numerics/optimize.hpp"
 #include "numerics/eigen_instances.hpp"
 
@@ -292,31 +293,11 @@ LineStats line_stats(const Spectra& s, const Augment& a, const std::vector<int>&
 
 double gap_of(const LineStats& st) { return (st.M - 2.0) / (st.M - 1.0) * st.t.mean(); }
 
-// Fisher's combination of the per-line p-values p = (1 + t/(M−1))^{−(M−1)}
-// (t ~ F(2, 2M−2)): X = −2 Σ ln p = 2 (M−1) Σ ln(1 + t/(M−1)) ~ χ²_{2K}
-// under the null; fisher_p is its upper tail.
-double fisher_statistic(const Eigen::VectorXd& t, int M) {
-  double X = 0;
-  for (double v : t) X += 2.0 * (M - 1) * std::log1p(v / (M - 1));
-  return X;
-}
-
-double fisher_p(const Eigen::VectorXd& t, int M) {
-  if (t.size() == 0) return 1.0;
-  return boost::math::cdf(boost::math::complement(boost::math::chi_squared(2.0 * t.size()), fisher_statistic(t, M)));
-}
-
-// The lower tail: P(X ≤ observed) when q real parameters were fitted to the
-// 2K real residual components. A least-squares fit of q parameters removes
-// about q χ²₁ terms from the sum (exactly so for a linear fit of the
-// residuals; X's terms are ln(1 + t/(M−1)), ≈ t/(M−1) for the small t a fit
-// leaves, so the same count), hence χ² with 2K − q degrees of freedom: with
-// fewer degrees the tail is smaller, so the test errs towards not flagging.
-double fisher_p_below(const Eigen::VectorXd& t, int M, int q) {
-  const double dof = 2.0 * static_cast<double>(t.size()) - q;
-  if (t.size() == 0 || !(dof > 0)) return 1.0;
-  return boost::math::cdf(boost::math::chi_squared(dof), fisher_statistic(t, M));
-}
+// Fisher's combination of the per-line p-values (numerics/fisher.hpp): the
+// lines' t are F(2, 2M − 2), X = 2 (M−1) Σ ln(1 + t/(M−1)) ~ χ²_{2K} under the
+// null; fisher_p is its upper tail, fisher_p_below the lower one after a fit.
+using numerics::fisher_p;
+using numerics::fisher_p_below;
 
 // The leakage test of period l against the mean of periods l+1 … M−1 (see gap.hpp).
 double period_deviation_p(const Spectra& s, const Augment& a, int l) {

@@ -67,7 +67,7 @@ json to_json(const FitVerdict& f) {
   if (!f.available) return {{"available", false}, {"v_sub", f.v_sub}, {"reason", "no noise model (unit weights)"}};
   return {{"available", true}, {"v_sub", f.v_sub},   {"terms", f.terms},     {"periods", f.periods},
           {"expected", f.expected}, {"std", f.std},   {"ratio", f.ratio},     {"z", f.z},
-          {"p_bound", f.p_bound},   {"p_bound_method", "Cantelli: 1 / (1 + z^2)"},
+          {"p_bound", f.p_bound},   {"p_bound_method", "Fisher: -2 sum ln S(t) against chi-square(2T), S the Exp(1) or F(2, 2M - 2) survival"},
           {"misfit", f.misfit},     {"summary", f.summary()}};
 }
 

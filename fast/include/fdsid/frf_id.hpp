@@ -215,6 +215,10 @@ std::string instability_warning(Domain domain, const Eigen::VectorXcd& poles);
 
 /// Eq. (35): Σ_k Σ_j Σ_i |Y − G U|²_i / σ²_i over all frequencies and columns.
 double v_sub(const StateSpace& model, const FrfData& data);
+/// V_SUB's T = F p c terms |Y − G U|²_i / σ²_i one by one (frequency by
+/// frequency, each p × c block column-major): Exp(1) at the true model with
+/// known variances, F(2, 2M − 2) with the sample variances of M periods.
+Eigen::VectorXd v_sub_terms(const StateSpace& model, const FrfData& data);
 
 /// Bilinear back-transformation of Algorithm 2.1: (A_w, B_w, C_w, D_w) in
 /// w = (s/ω_s − 1)/(s/ω_s + 1) to (A, B, C, D) in s:

@@ -71,10 +71,10 @@ struct RefineResult {
   int free_parameters = 0;      ///< parameters − gauge (1 per real pole, 2 per complex pair): what the data determine
   /// Goodness of fit (not for RefineNoise::None). Known variance: 2V ~ χ²(2T − q) under a right model, Gaussian
   /// noise, first order in the q free parameters: E V = T − q/2, p = P(χ² ≥ 2V). Sample variance: each term
-  /// ~ F(2, 2M−2) (mean d/(d−2), d = 2M − 2), E V = (T − q/2) d/(d−2); p by Cantelli's bound as FitVerdict.
+  /// ~ F(2, 2M−2) (mean d/(d−2), d = 2M − 2), E V = (T − q/2) d/(d−2); p = P(χ²(2T − q) ≥ X) with X Fisher's
+  /// combination of the terms (2V for known variances; numerics/fisher.hpp).
   double expected_cost = 0;
   double p_value = 1;
-  bool p_is_bound = false;      ///< p is Cantelli's upper bound (sample variance), not the χ² tail
   int iterations = 0;
   std::string termination;      ///< Ceres's termination: "convergence", "no_convergence", ...
   bool at_stability_bound = false;  ///< a pole sits on the stability margin (the constraint is active)
