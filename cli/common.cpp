@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <vector>
 
 #include <unistd.h>
@@ -104,6 +106,19 @@ CLI::Validator order_value() {
       "n|auto");
 }
 
+CLI::Validator whole_count() {
+  return CLI::Validator(
+      [](std::string& s) -> std::string {
+        char* end = nullptr;
+        errno = 0;
+        const long v = std::strtol(s.c_str(), &end, 10);
+        if (s.empty() || *end != '\0' || errno != 0 || v < 0 || v > std::numeric_limits<int>::max())
+          return "\"" + s + "\" is not a whole number >= 0";
+        return {};
+      },
+      "INT>=0");
+}
+
 CLI::Validator output_path(const std::string& option) {
   return CLI::Validator(
       [option](std::string& s) -> std::string {
@@ -144,7 +159,7 @@ void add_record_selection_options(CLI::App* sub, RecordSelection& selection) {
   sub->add_option("--output", selection.outputs, "records: the output column(s) by header name, e.g. --output Acceleration1");
   sub->add_option("--skip-periods", selection.skip_periods,
                   "records: drop this many leading periods (a transient); the meta's periods are reduced by it")
-      ->check(CLI::NonNegativeNumber)
+      ->check(whole_count())
       ->capture_default_str();
   sub->add_option("--use-periods", selection.use_periods,
                   "records: after the skipped periods use only this many (e.g. --skip-periods 1 --use-periods 4: "

@@ -81,6 +81,10 @@ extern const std::map<std::string, Precision> kPrecisions;  // double, high
 
 /// --order: a positive integer (<= 1000) or auto (stored as 0).
 CLI::Validator order_value();
+/// A count that may be 0 (--skip-periods): a whole number in [0, 2^31 − 1];
+/// CLI11's NonNegativeNumber printed the largest double, 309 digits, in its
+/// refusal (review finding 8 of stop 47).
+CLI::Validator whole_count();
 
 /// An output file option (--out, --json, ...): checked at parse time, before
 /// any work (fdsid::require_writable_path: folder exists and is writable, the

@@ -565,7 +565,7 @@ FrfData data_and_settings(const FrfCheckRequest& q, const StateSpace& candidate,
   } else {
     const Records rec = read_records(q.data_path, q.meta_path, c.rec.selection);
     const RecordMeta& meta = rec.meta;
-    require_sample_subspace_periods(meta, q.meta_path);
+    require_sample_subspace_periods(meta, q.meta_path, c.rec.selection);
     if (c.domain == Domain::Discrete && std::abs(candidate.sample_time - meta.sample_time) > 1e-5 * meta.sample_time)
       throw Error(ErrorKind::Input, q.model_path + " field \"sample_time\"",
                   fmt(candidate.sample_time, 10) + " differs from the records' " + fmt(meta.sample_time, 10) + " (" +

@@ -258,7 +258,7 @@ int run(const IdentifyFrfCommand& c) {
   } else {
     const Records rec = read_records(c.data_path, c.meta_path, c.selection);
     const RecordMeta& meta = rec.meta;
-    if (c.noise_std.empty()) require_sample_subspace_periods(meta, c.meta_path);
+    if (c.noise_std.empty()) require_sample_subspace_periods(meta, c.meta_path, c.selection);
     try {
       if (c.noise_std.empty()) {
         stats = record_statistics(rec.samples, rec.inputs, meta, c.domain);

@@ -82,7 +82,7 @@ int run_validate(const ValidateCommand& c) {
     below = below || fit.fit_percent[o] < c.min_fit;
   }
   out << "the model's periodic steady-state response to the record's input against its output, both averaged over "
-      << fit.periods << " periods, DC left out (fit = 100 (1 - ||y - yhat|| / ||y - mean y||), as MATLAB's compare)\n";
+      << fit.periods << (fit.periods == 1 ? " period" : " periods") << ", DC left out (fit = 100 (1 - ||y - yhat|| / ||y - mean y||), as MATLAB's compare)\n";
   if (below) out << "below --min-fit " << fmt(c.min_fit, 4) << " %\n";
   emit_json(c.json_path, {{"model", c.model_path},
                           {"data", c.data_path},
@@ -115,7 +115,15 @@ void register_records(CLI::App& app, Action& chosen) {
       ->required();
   val->add_option("--data", v->data_path, "periodic records CSV")->required();
   val->add_option("--meta", v->meta_path, "meta JSON of the records")->required();
-  val->add_option("--min-fit", v->min_fit, "exit 1 when an output's fit is below this many percent (default: no threshold)");
+  val->add_option("--min-fit", v->min_fit, "exit 1 when an output's fit is below this many percent (default: no threshold)")
+      ->check(CLI::Validator(
+          [](std::string& s) -> std::string {  // a fit is 100 % at best: --min-fit 150 always failed
+            char* end = nullptr;
+            const double v = std::strtod(s.c_str(), &end);
+            if (s.empty() || *end != '\0' || !(v <= 100)) return "\"" + s + "\" is not a percentage <= 100";
+            return {};
+          },
+          "PERCENT<=100"));
   add_json_option(val, v->json_path, "write the fit here (- = stdout)");
   add_record_selection_options(val, v->selection);
   on_parsed(val, v, chosen, run_validate);

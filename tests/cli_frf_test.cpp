@@ -688,6 +688,47 @@ TEST_F(CliFrf, ExcitedLinesWithoutInputPowerAreNamed) {
   EXPECT_TRUE(Succeeded(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json")})));
 }
 
+// Review finding 8 of stop 47: misread inputs are refused naming their cause,
+// not a neighbour's: a noise-free record's unexcited lines (their ratio 0/0
+// printed "= inf, below the 1 % point"), a misspelt meta field, periods left
+// too few by --skip-periods (the meta's "periods" was blamed), a negative
+// count (CLI11 printed a 309-digit bound), a short first row of A ("row 2" was
+// named), a --min-fit no fit can reach; and "1 period" in the singular.
+TEST_F(CliFrf, MisreadInputsAreNamedByTheirCause) {
+  simulate(256, 8, 0.0, "clean");
+  json meta = read_json("clean.meta.json");
+  std::vector<int> shifted;
+  for (int k : meta.at("excited_lines").get<std::vector<int>>()) shifted.push_back(k + 1);
+  meta["excited_lines"] = shifted;
+  const RunResult floor = run_fdsid({"identify-frf", "--data", path("clean.csv"), "--meta",
+                                     write("shifted.meta.json", meta.dump())});
+  EXPECT_TRUE(IsBadInput(floor, {"carry no input power", "at the rounding floor"}));
+  EXPECT_EQ(floor.err.find("inf"), std::string::npos) << floor.err;
+  json typo = read_json("clean.meta.json");
+  typo["peroid"] = typo["period"];
+  typo.erase("period");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", path("clean.csv"), "--meta",
+                                    write("typo.meta.json", typo.dump())}),
+                         {"field \"period\"", "is missing", "\"peroid\" a misspelling"}));
+  const std::string d = path("clean.csv"), m = path("clean.meta.json");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", d, "--meta", m, "--skip-periods", "7"}),
+                         {"--skip-periods/--use-periods", "M = 1 period left by --skip-periods 7"}));
+  const RunResult negative = run_fdsid({"identify-frf", "--data", d, "--meta", m, "--skip-periods", "-1"});
+  EXPECT_TRUE(IsBadInput(negative, {"--skip-periods", "\"-1\" is not a whole number >= 0"}));
+  EXPECT_LT(negative.err.size(), 120u) << negative.err;
+  json ragged = json::parse(kPintelonModel);
+  ragged["A"][0].erase(3);
+  const std::string r = write("ragged.json", ragged.dump());
+  EXPECT_TRUE(IsBadInput(run_fdsid({"validate", "--model", r, "--data", d, "--meta", m}),
+                         {"field \"A\"", "row 2 has 4 entries, row 1 has 3"}));
+  const std::string model = write("model.json", kPintelonModel);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"validate", "--model", model, "--data", d, "--meta", m, "--min-fit", "150"}),
+                         {"--min-fit", "not a percentage <= 100"}));
+  const RunResult one = run_fdsid({"validate", "--model", model, "--data", d, "--meta", m, "--skip-periods", "7"});
+  ASSERT_TRUE(Succeeded(one));
+  EXPECT_NE(one.out.find("averaged over 1 period,"), std::string::npos) << one.out;
+}
+
 // Review finding 4: with a noise model far too optimistic (G_var 1e-12 for
 // noise of variance 2e-6), every singular value lies above the noise level and
 // --order auto stopped at its cap, 19, calling it "read from the singular

@@ -8,6 +8,7 @@
 #include "numerics/autoregression.hpp"
 #include "numerics/constants.hpp"
 #include "numerics/fft.hpp"
+#include "numerics/fisher.hpp"
 #include "fdsid/format.hpp"
 #include "numerics/lyapunov.hpp"
 #include "numerics/optimize.hpp"
@@ -129,6 +130,34 @@ TEST(NumericsFormat, FormatsOfTheDiagnostics) {
   EXPECT_EQ(fmt(1e-8, 4), "1e-08");
   EXPECT_EQ(fmt(0.123456789, 6), "0.123457");
   EXPECT_EQ(sci(1234.56, 3), "1.235e+03");
+  // Review finding 8 of stop 47: a relative error in (0.1, 1) was "usable to about 0 significant digits".
+  EXPECT_NE(precision_warning(0.117, "A", "c").find("usable to about its order of magnitude"), std::string::npos);
+  EXPECT_NE(precision_warning(0.02, "A", "c").find("usable to about 1 significant digit ("), std::string::npos);
+  EXPECT_EQ(precision_warning(2.0, "A", "c").rfind("UNUSABLE", 0), 0u);
+}
+
+// One term's p is its own survival function S(t) (χ²₂'s tail at −2 ln S is
+// S): S(t) = e^{−t} for known variances and (1 + t/(M−1))^{−(M−1)} for the
+// sample variances of M periods (the F(2, 2M − 2) law); t chosen so that
+// S = 0.3, to rounding (a few u through log1p/exp and Boost's χ² tail).
+TEST(NumericsFisher, OneTermsPIsItsSurvivalFunction) {
+  const double S = 0.3;
+  Eigen::VectorXd known(1), sample(1);
+  known << -std::log(S);
+  const int M = 8;
+  sample << (M - 1) * (std::pow(S, -1.0 / (M - 1)) - 1);
+  EXPECT_NEAR(fisher_p(known, 0), S, 1e-14);
+  EXPECT_NEAR(fisher_p(sample, M), S, 1e-14);
+  EXPECT_NEAR(fisher_statistic(sample, M), -2 * std::log(S), 1e-14);
+  // Two equal terms: X = −4 ln S against χ²₄, whose tail is e^{−x/2}(1 + x/2).
+  Eigen::VectorXd two(2);
+  two << sample(0), sample(0);
+  const double x = -4 * std::log(S);
+  EXPECT_NEAR(fisher_p(two, M), std::exp(-x / 2) * (1 + x / 2), 1e-14);
+  // q fitted parameters: χ²(2K − q); with 2K − q = 2 the tail is e^{−x/2}.
+  EXPECT_NEAR(fisher_p(two, M, 2), std::exp(-x / 2), 1e-14);
+  EXPECT_NEAR(fisher_p_below(two, M, 2), 1 - std::exp(-x / 2), 1e-14);
+  EXPECT_EQ(fisher_p(Eigen::VectorXd(0), M), 1.0);
 }
 
 }  // namespace

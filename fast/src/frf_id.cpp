@@ -990,6 +990,7 @@ AutomaticOrder automatic_order(const FrfData& d, const FrfOptions& o, int r_feas
     if (a.order == n_max && n_max < sv.size() && sv(n_max) * sv(n_max) > 2 * edge)
       a.capped = "order " + std::to_string(a.order) + " is the top of the searched range (n <= " +
                  std::to_string(n_max) + " at r = " + std::to_string(a.order_r) +
+                 (o.r > 0 ? std::string() : ", the r the order is read at; the model's r is then chosen by V_SUB") +
                  "), not where the singular values reach the noise level (sigma_" + std::to_string(n_max + 1) +
                  "^2 = " + fmt(sv(n_max) * sv(n_max), 3) + " > 2 x edge " + fmt(2 * edge, 3) +
                  "): the data need a larger --max-order (and --r), or the noise model is too optimistic";
@@ -1165,10 +1166,10 @@ void require_input_power(const Eigen::MatrixXd& samples, int inputs, const Recor
   // survival function is (1 + t/(M-1))^{-(M-1)}: its upper 1 % point q.
   const double q = (M - 1) * (std::pow(0.01, -1.0 / (M - 1)) - 1);
   int quiet = 0, first_quiet = -1;
-  double first_ratio = 0;
+  double first_ratio = 0, first_power = 0;
   for (int j = 0; j < F; ++j) {
     bool powered = false;
-    double best = 0;
+    double best = 0, strongest = 0;
     for (int i = 0; i < inputs; ++i) {
       cplx mean = 0;
       for (int l = 0; l < M; ++l) mean += sp[l][j](i);
@@ -1179,10 +1180,19 @@ void require_input_power(const Eigen::MatrixXd& samples, int inputs, const Recor
       const double power = std::norm(mean);
       const double ratio = var > 0 ? power / (var / M) : std::numeric_limits<double>::infinity();
       best = std::max(best, ratio);
+      strongest = std::max(strongest, power);
       if (power > 1e-20 * energy && ratio > q) powered = true;
     }
-    if (!powered && ++quiet == 1) first_quiet = meta.excited_lines[j], first_ratio = best;
+    if (!powered && ++quiet == 1) first_quiet = meta.excited_lines[j], first_ratio = best, first_power = strongest;
   }
+  // The example line's reason: at the rounding floor (a noise-free record's
+  // unexcited line, whose ratio may be 0/0 or inf: review finding 8 of stop
+  // 47 printed "= inf, below the 1 % point"), or below the noise's 1 % point.
+  const std::string why = first_power <= 1e-20 * energy
+                              ? "|U|^2 = " + sci(first_power / energy) +
+                                    " of one period's energy, at the rounding floor 1e-20"
+                              : "|U|^2 / (s^2_U / M) = " + sci(first_ratio) + ", below the 1 % point " + sci(q) +
+                                    " of noise alone";
   // A line of a meta that lists the right lines is quiet with probability
   // <= 1 % (noise alone) or never (an excited line); more than half of them
   // quiet is a meta that lists the wrong lines (0-based, shifted, another
@@ -1190,9 +1200,8 @@ void require_input_power(const Eigen::MatrixXd& samples, int inputs, const Recor
   if (2 * quiet > F)
     fail(ErrorKind::Input, "meta field \"excited_lines\"",
          std::to_string(quiet) + " of the " + std::to_string(F) +
-             " listed lines carry no input power (e.g. line " + std::to_string(first_quiet) + ": |U|^2 / (s^2_U / M) = " +
-             sci(first_ratio) + ", below the 1 % point " + sci(q) +
-             " of noise alone): the excitation is on other lines; are the lines 1-based DFT indices k = 1 ... P/2 "
+             " listed lines carry no input power (e.g. line " + std::to_string(first_quiet) + ": " + why +
+             "): the excitation is on other lines; are the lines 1-based DFT indices k = 1 ... P/2 "
              "(frequency k / (P Ts))?");
 }
 

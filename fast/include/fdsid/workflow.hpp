@@ -23,8 +23,10 @@ namespace fdsid {
 /// Purpose: refuse a periodic record with too few periods before any work.
 /// Method: Pintelon (2002) Theorem 2: the sample-subspace estimates of B and D
 /// need M >= 4 periods, those of A and C M >= 2.
-/// Fails: Error(Input) at `meta_path` field "periods" naming M.
-void require_sample_subspace_periods(const RecordMeta& meta, const std::string& meta_path);
+/// Fails: Error(Input) at `meta_path` field "periods" naming M, or at
+/// --skip-periods/--use-periods when the selection left too few.
+void require_sample_subspace_periods(const RecordMeta& meta, const std::string& meta_path,
+                                     const RecordSelection& selection = {});
 
 /// How periodic records are turned into frequency-domain data (Section 5).
 enum class RecordTreatment {

@@ -26,8 +26,10 @@ std::string precision_warning(double estimate, const std::string& what, const st
   if (usable_precision(estimate)) {
     const int digits = static_cast<int>(std::floor(-std::log10(estimate)));
     return "double precision may have lost accuracy: estimated relative error of " + what + " " + fmt(estimate, 3) +
-           " (" + details + "): usable to about " + std::to_string(digits) + " significant digit" +
-           (digits == 1 ? "" : "s") + " (a first-order bound; the true error is often smaller); compare with --precision high";
+           " (" + details + "): usable to about " +
+           (digits < 1 ? std::string("its order of magnitude")
+                       : std::to_string(digits) + " significant digit" + (digits == 1 ? "" : "s")) +
+           " (a first-order bound; the true error is often smaller); compare with --precision high";
   }
   return "UNUSABLE in double precision: estimated relative error of " + what + " " + fmt(estimate, 3) + " (" + details +
          ") leaves no correct digit; use --precision high, a lower order or another r (--strict: exit 1)";
