@@ -361,6 +361,9 @@ int run(const IdentifyFrfCommand& c) {
   for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
   if (refused_as_unusable(c.strict, res.error_estimate)) return 1;
   nlohmann::json j = to_json(res, method, source);
+  // The band the data cover, in the model's omega (rad/sample; rad/s in
+  // continuous time): validate names a record's lines outside it.
+  j["omega_band"] = {data.omega.minCoeff(), data.omega.maxCoeff()};
   j["fit"] = to_json(fit);
   if (c.refine) j["refinement"] = refinement_json(refined, ro);
   if (!stabilised.empty()) j["stabilised"] = stabilised;

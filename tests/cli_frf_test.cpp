@@ -1414,6 +1414,28 @@ TEST_F(CliFrf, ValidateScoresAModelOnARecord) {
   EXPECT_TRUE(IsBadInput(run_fdsid({"validate", "--model", write("unstable.json", unstable.dump()), "--data",
                                     path("rec.csv"), "--meta", path("rec.meta.json")}),
                          {"unstable pole"}));
+  // Review finding 5 of stop 47: a model identified on the lines below P/4 (simulate-records' default)
+  // scored on a record of all odd lines below P/2 says that the lines above its band are extrapolation;
+  // on the record it was identified from, no such word.
+  const std::string plant = write("plant.json", kPintelonModel);
+  ASSERT_TRUE(Succeeded(run_fdsid({"simulate-records", "--model", plant, "--out", path("low.csv"), "--meta-out",
+                                   path("low.meta.json"), "--period", "256", "--noise-std", "1e-3"})));
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--data", path("low.csv"), "--meta", path("low.meta.json"),
+                                   "--order", "4", "--json", path("low_model.json")})));
+  const RunResult wide = run_fdsid({"validate", "--model", path("low_model.json"), "--data", path("rec.csv"), "--meta",
+                                    path("rec.meta.json"), "--json", path("wide_fit.json")});
+  ASSERT_TRUE(Succeeded(wide));
+  // rec: the odd lines 1 ... 127 of P = 256; low: the odd lines below 64, 1 ... 63.
+  EXPECT_NE(wide.out.find("warning: 32 of the record's 64 excited lines lie outside the band the model was identified "
+                          "on (0.003906 to 0.2461 Hz"),
+            std::string::npos)
+      << wide.out;
+  EXPECT_NE(wide.out.find("32 above it (up to 0.4961 Hz)"), std::string::npos) << wide.out;
+  EXPECT_EQ(read_json("wide_fit.json")["warnings"].size(), 1u);
+  const RunResult own = run_fdsid({"validate", "--model", path("low_model.json"), "--data", path("low.csv"), "--meta",
+                                   path("low.meta.json")});
+  ASSERT_TRUE(Succeeded(own));
+  EXPECT_EQ(own.out.find("warning"), std::string::npos) << own.out;
 }
 
 // Review finding 38: a precision warning says whether the model is usable,

@@ -439,7 +439,8 @@ Step1 step1c_whitened_svd(const Eigen::MatrixXd& CY, const Eigen::MatrixXd& R, i
   if (llt.info() != Eigen::Success)
     fail(ErrorKind::Numerical, "step 1c",
          "C_Y = sum of sigma^2 W W^H (Eq. 18) is not positive definite: " + band_advice(d, b, r) +
-             " (or the variances are zero or tiny: check the G_var column)");
+             " (or the variances are zero or tiny: the FRF file's G_var column, or records that repeat from period "
+             "to period)");  // records have no G_var column (review finding 7 of stop 47)
   s.L = llt.matrixL();
   const Eigen::MatrixXd K = s.L.triangularView<Eigen::Lower>().solve(R22t);
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(K, Eigen::ComputeFullU);

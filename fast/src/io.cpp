@@ -248,9 +248,9 @@ nlohmann::json read_json_file(const std::string& path, const char* what) {
 }
 }  // namespace
 
-StateSpace read_model(const std::string& path) {
-  return model_from_json(read_json_file(path, "model file"), path);
-}
+nlohmann::json read_model_file(const std::string& path) { return read_json_file(path, "model file"); }
+
+StateSpace read_model(const std::string& path) { return model_from_json(read_model_file(path), path); }
 
 nlohmann::json model_to_json(const StateSpace& m) {
   return {{"domain", to_string(m.domain)}, {"sample_time", m.sample_time}, {"A", matrix_to_json(m.A)},

@@ -17,6 +17,9 @@ namespace fdsid {
 /// numbers or decimal strings (parsed with strtod, correctly rounded).
 StateSpace model_from_json(const nlohmann::json& j, const std::string& where = "model");
 StateSpace read_model(const std::string& path);
+/// The model file's JSON as read_model reads it (readable, no key twice), for
+/// the fields beside the model (identify-frf's "omega_band", "source").
+nlohmann::json read_model_file(const std::string& path);
 nlohmann::json model_to_json(const StateSpace& model);
 /// The model's poles as [[re, im], ...] (the "poles" field of an identified model).
 nlohmann::json poles_to_json(const StateSpace& model);
