@@ -37,24 +37,6 @@ bool unknown_subcommand(const CLI::App& app, int argc, char** argv) {
   return false;
 }
 
-namespace {
-// Levenshtein distance (insertions, deletions, substitutions).
-size_t edit_distance(const std::string& a, const std::string& b) {
-  std::vector<size_t> row(b.size() + 1);
-  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (size_t i = 1; i <= a.size(); ++i) {
-    size_t diag = row[0];
-    row[0] = i;
-    for (size_t j = 1; j <= b.size(); ++j) {
-      const size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
-}
-}  // namespace
-
 std::string unexpected_arguments(const CLI::App& app, int argc, char** argv, const std::string& cli11_message) {
   // The subcommand (and reproduce's target) named on the command line.
   const CLI::App* sub = nullptr;

@@ -747,23 +747,9 @@ const std::array<const char*, 4> kMetaFields = {"period", "periods", "sample_tim
 // (review finding 8 of stop 47: "peroid" for "period" gave "is missing" alone;
 // "periods", a field of its own, is no misspelling of "period").
 std::string misspelling_hint(const nlohmann::json& j, const std::string& key) {
-  auto distance = [](const std::string& a, const std::string& b) {  // Levenshtein
-    std::vector<size_t> row(b.size() + 1);
-    for (size_t c = 0; c <= b.size(); ++c) row[c] = c;
-    for (size_t i = 1; i <= a.size(); ++i) {
-      size_t diagonal = row[0];
-      row[0] = i;
-      for (size_t c = 1; c <= b.size(); ++c) {
-        const size_t up = row[c];
-        row[c] = std::min({row[c] + 1, row[c - 1] + 1, diagonal + (a[i - 1] == b[c - 1] ? 0 : 1)});
-        diagonal = up;
-      }
-    }
-    return row[b.size()];
-  };
   for (const auto& item : j.items())
     if (std::find(kMetaFields.begin(), kMetaFields.end(), item.key()) == kMetaFields.end() &&
-        distance(item.key(), key) <= 2)
+        edit_distance(item.key(), key) <= 2)
       return " (is \"" + item.key() + "\" a misspelling of it?)";
   return "";
 }

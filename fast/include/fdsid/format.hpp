@@ -2,6 +2,7 @@
 /// Number formatting of diagnostics and summaries, one home for fast/ and the
 /// CLI (fast/src/numerics/format.cpp). Error, warning and summary texts are
 /// compared by tests, so each format is fixed here.
+#include <cstddef>
 #include <string>
 
 namespace fdsid {
@@ -25,11 +26,15 @@ std::string p_text(double p, int digits = 3);
 /// (six or more correct digits: more than the summaries print); below 1
 /// "usable to about d
 /// significant digits", d = ⌊−log10 estimate⌋ (a bound: the true error is
-/// often smaller); 1 or more, or not finite, "UNUSABLE …": no digit is
+/// often smaller), "its order of magnitude" for d = 0; 1 or more, or not finite, "UNUSABLE …": no digit is
 /// certain. `what` names the quantity and `details` the condition numbers.
 std::string precision_warning(double estimate, const std::string& what, const std::string& details);
 
 /// Whether an estimate with this relative error estimate has a correct digit (< 1).
 inline bool usable_precision(double estimate) { return estimate < 1.0; }
+
+/// Levenshtein distance (insertions, deletions, substitutions): how messages
+/// name a misspelt option or field (the CLI's unknown options, a meta's keys).
+size_t edit_distance(const std::string& a, const std::string& b);
 
 }  // namespace fdsid

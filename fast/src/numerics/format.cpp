@@ -1,8 +1,10 @@
 #include "fdsid/format.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <vector>
 
 namespace fdsid {
 
@@ -17,6 +19,21 @@ std::string sci(double x, int digits) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.*e", digits, x);
   return buf;
+}
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diag = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
 }
 
 std::string p_text(double p, int digits) { return p < 1e-300 ? std::string("< 1e-300") : sci(p, digits); }
