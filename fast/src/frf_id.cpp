@@ -1186,6 +1186,11 @@ void require_input_power(const Eigen::MatrixXd& samples, int inputs, const Recor
     }
     if (!powered && ++quiet == 1) first_quiet = meta.excited_lines[j], first_ratio = best, first_power = strongest;
   }
+  // A line of a meta that lists the right lines is quiet with probability
+  // <= 1 % (noise alone) or never (an excited line); more than half of them
+  // quiet is a meta that lists the wrong lines (0-based, shifted, another
+  // period).
+  if (2 * quiet <= F) return;
   // The example line's reason: at the rounding floor (a noise-free record's
   // unexcited line, whose ratio may be 0/0 or inf: review finding 8 of stop
   // 47 printed "= inf, below the 1 % point"), or below the noise's 1 % point.
@@ -1194,16 +1199,11 @@ void require_input_power(const Eigen::MatrixXd& samples, int inputs, const Recor
                                     " of one period's energy, at the rounding floor 1e-20"
                               : "|U|^2 / (s^2_U / M) = " + sci(first_ratio) + ", below the 1 % point " + sci(q) +
                                     " of noise alone";
-  // A line of a meta that lists the right lines is quiet with probability
-  // <= 1 % (noise alone) or never (an excited line); more than half of them
-  // quiet is a meta that lists the wrong lines (0-based, shifted, another
-  // period).
-  if (2 * quiet > F)
-    fail(ErrorKind::Input, "meta field \"excited_lines\"",
-         std::to_string(quiet) + " of the " + std::to_string(F) +
-             " listed lines carry no input power (e.g. line " + std::to_string(first_quiet) + ": " + why +
-             "): the excitation is on other lines; are the lines 1-based DFT indices k = 1 ... P/2 "
-             "(frequency k / (P Ts))?");
+  fail(ErrorKind::Input, "meta field \"excited_lines\"",
+       std::to_string(quiet) + " of the " + std::to_string(F) + " listed lines carry no input power (e.g. line " +
+           std::to_string(first_quiet) + ": " + why +
+           "): the excitation is on other lines; are the lines 1-based DFT indices k = 1 ... P/2 "
+           "(frequency k / (P Ts))?");
 }
 
 int repeated_line(const std::vector<int>& lines) {

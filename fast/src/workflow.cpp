@@ -14,14 +14,13 @@ namespace fdsid {
 void require_sample_subspace_periods(const RecordMeta& meta, const std::string& meta_path,
                                      const RecordSelection& selection) {
   // Review finding 8 of stop 47: --skip-periods 7 of 8 blamed the meta's "periods".
-  const bool selected = selection.skip_periods > 0 || selection.use_periods > 0;
-  std::string chosen;
+  std::string chosen;  // the options that left meta.periods; empty: the meta's own
   if (selection.skip_periods > 0) chosen += " --skip-periods " + std::to_string(selection.skip_periods);
   if (selection.use_periods > 0) chosen += " --use-periods " + std::to_string(selection.use_periods);
   if (meta.periods < 4)
-    throw Error(ErrorKind::Input, selected ? std::string("--skip-periods/--use-periods") : meta_path + " field \"periods\"",
+    throw Error(ErrorKind::Input, chosen.empty() ? meta_path + " field \"periods\"" : "--skip-periods/--use-periods",
                 "M = " + std::to_string(meta.periods) + (meta.periods == 1 ? " period" : " periods") +
-                    (selected ? " left by" + chosen + " (" + meta_path + ")" : std::string()) +
+                    (!chosen.empty() ? " left by" + chosen + " (" + meta_path + ")" : std::string()) +
                     ": the sample-subspace estimates of B and D need M >= 4, those of A and C "
                     "M >= 2 (Pintelon 2002 Theorem 2); with a known output noise level give it as --noise-std "
                     "(identify-frf: any M >= 1)");
