@@ -327,6 +327,7 @@ int run(const IdentifyFrfCommand& c) {
     drop_subspace_model_warnings(res, c.refine);
     if (c.refine) {  // the ML optimum does not inherit the subspace estimate's rounding; its own: u κ(J)
       res.condition = refined.condition;
+      res.rounding_assessed = false;
       res.error_estimate = std::numeric_limits<double>::epsilon() / 2 * refined.condition;  // u κ
       if (const std::string w = precision_warning(res.error_estimate, "the refined parameters",
                                                   "condition of the Jacobian " + fmt(refined.condition, 3));
@@ -359,7 +360,7 @@ int run(const IdentifyFrfCommand& c) {
   out << fit.summary() << "\n";
   if (c.improper) out << "the model is the inverse system 1/G (improper G, Pintelon 2002 Section 5)\n";
   for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
-  if (refused_as_unusable(c.strict, res.error_estimate)) return 1;
+  if (refused_as_unusable(c.strict, res.usability_estimate())) return 1;
   nlohmann::json j = to_json(res, method, source);
   // The band the data cover, in the model's omega (rad/sample; rad/s in
   // continuous time): validate names a record's lines outside it.

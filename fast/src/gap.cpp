@@ -879,7 +879,8 @@ class Diagnosis {
         Gr[i] = Eigen::MatrixXcd::Constant(1, 1, Rp(i) / Xp(i));
         var[i] = Eigen::MatrixXd::Constant(1, 1, 1.0 / (W.w(i) * std::norm(Xp(i))));
       }
-      const FrfResult r = identify_frf_fixed(frf_data(model_.domain, omega, Gr, var), 2, 4);
+      const FrfResult r = identify_frf_fixed(frf_data(model_.domain, omega, Gr, var), 2, 4, ContinuousMethod::Bilinear, 0,
+                                                 DiscreteMethod::Monomial, false);
       for (Eigen::Index i = 0; i < r.poles.size(); ++i)
         if (r.poles(i).imag() > 0) starts.push_back(r.poles(i));
     } catch (const Error&) {

@@ -337,7 +337,8 @@ void figure_run(const FigureOptions& o, const FigureSetup& su, int i, std::vecto
     models.push_back(st.data);
     models.push_back(std::move(st.data));
     for (int k = 0; k < F; ++k) models[1].variance[k](0, 0) = su.sigma2(k) / o.M;
-    const std::vector<FrfResult> both = identify_frf_fixed(models, o.order, o.r);
+    const std::vector<FrfResult> both = identify_frf_fixed(models, o.order, o.r, ContinuousMethod::Bilinear, 0,
+                                                                DiscreteMethod::Monomial, false);
     const StateSpace& eS = both[0].model;
     const StateSpace& eT = both[1].model;
     const FrfData& known = models[1];

@@ -20,15 +20,23 @@ std::string sci(double x, int digits = 3);
 /// double (it underflowed; review finding 21: not 0).
 std::string p_text(double p, int digits = 3);
 
-/// The precision verdict of an estimate whose first-order relative error
-/// estimate is `estimate` (u × a condition number; review finding 38: a
-/// warning must say whether the model is usable). "" when estimate ≤ 1e-6
-/// (six or more correct digits: more than the summaries print); below 1
-/// "usable to about d
-/// significant digits", d = ⌊−log10 estimate⌋ (a bound: the true error is
-/// often smaller), "its order of magnitude" for d = 0; 1 or more, or not finite, "UNUSABLE …": no digit is
+/// Relative error estimates at or below this say nothing: six or more correct
+/// digits, more than the summaries print.
+constexpr double kPrecisionWarningLevel = 1e-6;
+
+/// How a relative error estimate was obtained: u × a condition number (a
+/// first-order bound) or by rounding-size perturbations (a statistical estimate).
+enum class PrecisionEstimate { FirstOrderBound, Statistical };
+
+/// The precision verdict of an estimate whose relative error estimate is
+/// `estimate` (review finding 38: a warning must say whether the model is
+/// usable). "" when estimate ≤ kPrecisionWarningLevel; below 1 "usable to about d
+/// significant digits", d = ⌊−log10 estimate⌋ (said to be a bound, often
+/// pessimistic, or a statistical estimate, as `kind` says), "its order of
+/// magnitude" for d = 0; 1 or more, or not finite, "UNUSABLE …": no digit is
 /// certain. `what` names the quantity and `details` the condition numbers.
-std::string precision_warning(double estimate, const std::string& what, const std::string& details);
+std::string precision_warning(double estimate, const std::string& what, const std::string& details,
+                              PrecisionEstimate kind = PrecisionEstimate::FirstOrderBound);
 
 /// Whether an estimate with this relative error estimate has a correct digit (< 1).
 inline bool usable_precision(double estimate) { return estimate < 1.0; }

@@ -3,6 +3,7 @@
 /// input/output data: Pintelon (2002), Algorithms 1 and 2 (Section 3.1), the
 /// sample-subspace variant (Section 4.1), errors-in-variables and improper
 /// models (Section 5), and the choice of r by V_SUB (Eq. 35).
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -125,6 +126,20 @@ struct FrfResult {
   /// not a proven bound (cond(R11) was added after a narrow-band grid, n = 1,
   /// showed errors 1e6 × u with the first two factors alone).
   double error_estimate = 0;
+  /// Whether the rounding's effect on Ĝ and the poles was measured (only when
+  /// error_estimate exceeds kPrecisionWarningLevel: below it nothing is said).
+  bool rounding_assessed = false;
+  /// Similarity-invariant rounding estimates (statistical: step 1c's subspace
+  /// moved by its first-order rounding angle in random directions, steps 2-3
+  /// rerun): the relative error of Ĝ on the data's frequencies, ‖ΔG‖_F/‖G‖_F,
+  /// and the largest relative pole error |Δλ|/|λ|.
+  double g_error_estimate = 0;
+  double pole_error_estimate = 0;
+  /// The relative error that decides whether the model is usable: the larger
+  /// of the G and pole estimates when assessed, else error_estimate.
+  double usability_estimate() const {
+    return rounding_assessed ? std::max(g_error_estimate, pole_error_estimate) : error_estimate;
+  }
   /// Plain-language warnings where fast/ may lose accuracy (error_estimate
   /// above 1e-6). Printed by the CLI and written to the JSON.
   std::vector<std::string> warnings;
@@ -154,9 +169,13 @@ struct FrfResult {
 /// Ljung, IEEE TAC 41 (1996); Verhaegen (1994); Yang & Sanada (2000).
 /// Discrete data with DiscreteMethod::Bilinear: see there; omega_scale is then
 /// ω_s in rad/sample, 0 < ω_s < π.
+/// assess_rounding: measure the rounding's effect on Ĝ and the poles when
+/// error_estimate exceeds kPrecisionWarningLevel (FrfResult::rounding_assessed;
+/// 3 more runs of steps 2-3); false for inner loops that read only the model
+/// (Monte Carlo studies, the gap's start values).
 FrfResult identify_frf_fixed(const FrfData& data, int order, int r,
                              ContinuousMethod continuous = ContinuousMethod::Bilinear, double omega_scale = 0,
-                             DiscreteMethod discrete = DiscreteMethod::Monomial);
+                             DiscreteMethod discrete = DiscreteMethod::Monomial, bool assess_rounding = true);
 
 /// identify_frf_fixed for several noise models of the same measurements:
 /// data[v] differ only in `variance` (U, Y, ω, domain and sample time must be
@@ -167,7 +186,8 @@ FrfResult identify_frf_fixed(const FrfData& data, int order, int r,
 /// known-variance estimates of one run this way).
 std::vector<FrfResult> identify_frf_fixed(const std::vector<FrfData>& data, int order, int r,
                                           ContinuousMethod continuous = ContinuousMethod::Bilinear,
-                                          double omega_scale = 0, DiscreteMethod discrete = DiscreteMethod::Monomial);
+                                          double omega_scale = 0, DiscreteMethod discrete = DiscreteMethod::Monomial,
+                                          bool assess_rounding = true);
 
 /// Identification with the choices of Section 5: the order from the singular
 /// values of step 1c (when options.order == 0) and r minimising V_SUB (Eq. 35)
