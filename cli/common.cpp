@@ -177,6 +177,15 @@ void add_strict_option(CLI::App* sub, bool& strict) {
                 "error is 1 or more: no correct digit)");
 }
 
+std::string unusable_model_warning(const nlohmann::json& model_json, const std::string& path) {
+  if (!model_json.is_object() || !model_json.contains("diagnostics")) return "";
+  const nlohmann::json& d = model_json["diagnostics"];
+  if (!d.is_object() || !d.contains("usable") || !d["usable"].is_boolean() || d["usable"].get<bool>()) return "";
+  return path + " says its estimate is unusable in double precision (diagnostics.usable false: no correct digit in " +
+         "its G or poles), so every number computed from it here may be too; identify it again (see the file's "
+         "warnings: --precision high, a lower order or another r)";
+}
+
 bool refused_as_unusable(bool strict, double error_estimate) {
   if (!strict || usable_precision(error_estimate)) return false;
   std::cerr << "fdsid: --strict: the estimate is unusable in double precision (estimated relative error "

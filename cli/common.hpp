@@ -107,6 +107,10 @@ void add_strict_option(CLI::App* sub, bool& strict);
 /// With --strict and an unusable estimate: one line on stderr, true (the
 /// caller returns 1 before writing anything).
 bool refused_as_unusable(bool strict, double error_estimate);
+/// The warning for a model file whose own diagnostics say it is unusable in
+/// double precision ("usable": false), or "" (validate and gap read such
+/// files; review finding 2 of stop 48: they said nothing).
+std::string unusable_model_warning(const nlohmann::json& model_json, const std::string& path);
 
 // ---------------------------------------------------------------------------
 // Output

@@ -256,7 +256,9 @@ int run_gap(const GapCommand& c) {
   refuse_overwrite(c.table_path, {c.model_path, c.data_path, c.meta_path, c.json_path}, "--table");
   Out out{c.json_path == "-"};
   const GapOptions& o = c.options;
-  const StateSpace model = read_model(c.model_path);
+  const nlohmann::json model_json = read_model_file(c.model_path);
+  const StateSpace model = model_from_json(model_json, c.model_path);
+  const std::string unusable = unusable_model_warning(model_json, c.model_path);
   const Records records = read_records(c.data_path, c.meta_path, c.selection);
   const RecordMeta& meta = records.meta;
   const int outputs = static_cast<int>(records.samples.cols()) - records.inputs;
@@ -279,11 +281,13 @@ int run_gap(const GapCommand& c) {
         << "to the noise), after " << sci(m.gap_after) << "; joint gap " << sci(m.gap_joint) << "\n";
     out << multi_verdict_line(m, names) << "\n";
     for (const std::string& n : m.notes) out << "note: " << n << "\n";
+    if (!unusable.empty()) out << "warning: " << unusable << "\n";
     for (size_t k = 0; k < m.channels.size(); ++k) {
       out << "== output " << k + 1 << " (" << names[k] << ")\n";
       print_report(out, m.channels[k], meta.periods);
     }
     nlohmann::json j = gap_report_to_json(m);
+    if (!unusable.empty()) j["warnings"] = {unusable};
     for (size_t k = 0; k < m.channels.size(); ++k) j["channels"][k]["name"] = names[k];
     emit_json(c.json_path, j);
     return 0;
@@ -295,8 +299,11 @@ int run_gap(const GapCommand& c) {
     throw e.within(c.data_path);
   }
   print_report(out, r, meta.periods);
+  if (!unusable.empty()) out << "warning: " << unusable << "\n";
   if (!c.table_path.empty()) write_gap_table(c.table_path, r);
-  emit_json(c.json_path, to_json(r));
+  nlohmann::json j = to_json(r);
+  if (!unusable.empty()) j["warnings"] = {unusable};
+  emit_json(c.json_path, j);
   emit_plot(c.plot_path, [&] { return plot::gap_figure(r, meta.periods); });
   return 0;
 }

@@ -96,7 +96,9 @@ int run_validate(const ValidateCommand& c) {
   const nlohmann::json model_json = read_model_file(c.model_path);
   const StateSpace model = model_from_json(model_json, c.model_path);
   const Records rec = read_records(c.data_path, c.meta_path, c.selection);
-  const std::string outside = lines_outside_band(model_json, model, rec.meta);
+  std::vector<std::string> warnings;
+  if (std::string w = unusable_model_warning(model_json, c.model_path); !w.empty()) warnings.push_back(std::move(w));
+  if (std::string w = lines_outside_band(model_json, model, rec.meta); !w.empty()) warnings.push_back(std::move(w));
   RecordFit fit;
   try {
     fit = fit_on_record(model, rec);
@@ -118,14 +120,14 @@ int run_validate(const ValidateCommand& c) {
   out << "the model's periodic steady-state response to the record's input against its output, both averaged over "
       << fit.periods << (fit.periods == 1 ? " period" : " periods") << ", DC left out (fit = 100 (1 - ||y - yhat|| / ||y - mean y||), as MATLAB's compare)\n";
   if (below) out << "below --min-fit " << fmt(c.min_fit, 4) << " %\n";
-  if (!outside.empty()) out << "warning: " << outside << "\n";
+  for (const std::string& w : warnings) out << "warning: " << w << "\n";
   emit_json(c.json_path, {{"model", c.model_path},
                           {"data", c.data_path},
                           {"meta", c.meta_path},
                           {"periods_averaged", fit.periods},
                           {"lines", fit.lines},
                           {"outputs", outputs},
-                          {"warnings", outside.empty() ? nlohmann::json::array() : nlohmann::json::array({outside})},
+                          {"warnings", warnings},
                           {"pass", !below}});
   return below ? 1 : 0;
 }

@@ -1436,6 +1436,24 @@ TEST_F(CliFrf, ValidateScoresAModelOnARecord) {
                                    path("low.meta.json")});
   ASSERT_TRUE(Succeeded(own));
   EXPECT_EQ(own.out.find("warning"), std::string::npos) << own.out;
+  // Review finding 2 of stop 48: a model whose own file says it is unusable in double precision is named
+  // by validate, gap and simulate-records (the same model marked usable, above, draws no word).
+  json unusable = read_json("low_model.json");
+  ASSERT_TRUE(unusable["diagnostics"]["usable"].get<bool>());
+  unusable["diagnostics"]["usable"] = false;
+  const std::string marked = write("unusable_model.json", unusable.dump());
+  const std::vector<std::vector<std::string>> readers = {
+      {"validate", "--model", marked, "--data", path("low.csv"), "--meta", path("low.meta.json")},
+      {"gap", "--model", marked, "--data", path("low.csv"), "--meta", path("low.meta.json")},
+      {"simulate-records", "--model", marked, "--out", path("again.csv"), "--meta-out", path("again.meta.json"),
+       "--period", "256"}};
+  for (const auto& args : readers) {
+    const RunResult r = run_fdsid(args);
+    ASSERT_TRUE(Succeeded(r)) << describe(r);
+    EXPECT_NE(r.out.find("warning: " + marked + " says its estimate is unusable in double precision"),
+              std::string::npos)
+        << args[0] << ": " << r.out;
+  }
 }
 
 // Review finding 38: a precision warning says whether the model is usable,
