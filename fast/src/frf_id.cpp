@@ -942,6 +942,7 @@ struct RoundingEffect {
   double g = 0;                    // relative error of Ĝ on the grid
   double poles = 0;                // the largest pole error
   std::vector<cplx> undetermined;  // poles whose error is 1 or more
+  std::string failure;             // why a moved estimate failed (then g = poles = ∞), or ""
 };
 
 RoundingEffect rounding_effect(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, int n, int r,
@@ -984,10 +985,10 @@ RoundingEffect rounding_effect(const FrfData& d, const Bases& b, const Eigen::Ma
       for (int k = 0; k < F; ++k) dg += (G[k] - G0[k]).squaredNorm();
       out.g = std::max(out.g, g0 > 0 ? std::sqrt(dg / g0) : 0.0);
       moved = in_data_domain(moved, d, b);
-    } catch (const Error&) {  // the moved estimate fails where this one did not: nothing is determined
-      out.g = std::numeric_limits<double>::infinity();
-      std::fill(pole_error.begin(), pole_error.end(), std::numeric_limits<double>::infinity());
-      continue;
+    } catch (const Error& e) {  // the moved estimate fails where this one did not: nothing is determined
+      out.g = out.poles = std::numeric_limits<double>::infinity();
+      out.failure = e.what();
+      return out;
     }
     // Matched closest pair first (a pole set by rounding can land beside a
     // determined one; matching in the base poles' order then paired them).
@@ -1015,6 +1016,10 @@ RoundingEffect rounding_effect(const FrfData& d, const Bases& b, const Eigen::Ma
 // The precision warning for the rounding effect (empty below
 // kPrecisionWarningLevel), naming the poles set by rounding.
 std::string rounding_warning(const RoundingEffect& e, double a_bound) {
+  if (!e.failure.empty())
+    return "UNUSABLE in double precision: step 1b's R and step 1c's C_Y moved by their rounding make the estimate "
+           "fail (" + e.failure + "): rounding alone decides whether it exists (A's entries in the estimate's basis: "
+           "bound " + fmt(a_bound, 3) + "); use --precision high, a lower order or another r (--strict: exit 1)";
   const bool poles_worse = e.poles > e.g;
   const std::string details = std::string(poles_worse ? "G on the data's frequencies " + fmt(e.g, 3)
                                                       : "poles " + fmt(e.poles, 3)) +

@@ -824,6 +824,7 @@ nlohmann::json frf_result_to_json(const FrfResult& r, const std::string& method)
                       {"usable", usable_precision(r.usability_estimate())},
                       {"noise_edge", r.noise_edge}};
   if (r.rounding_assessed) {
+    // Infinite (null in JSON) when a rounding-size move made the estimate fail; the warning says which step.
     j["diagnostics"]["g_error_estimate"] = r.g_error_estimate;
     j["diagnostics"]["pole_error_estimate"] = r.pole_error_estimate;
     j["diagnostics"]["usable_from"] =
