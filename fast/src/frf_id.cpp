@@ -926,8 +926,8 @@ std::vector<Eigen::MatrixXcd> response_on_grid(const StateSpace& est, const Base
 //    alone gave 6e-9, the distance is 3.3e-3).
 // Changes are measured as ‖ΔG‖_F / ‖G‖_F over the grid (all channels; G in
 // the bases' variable, equal to the model's G at the data's frequencies)
-// and, per pole, |Δλ|/|λ| (|Δλ| for λ = 0), poles matched greedily to the
-// nearest; a pole that moves by its own size or more is "set by rounding"
+// and, per pole, |Δλ|/|λ| (|Δλ| for λ = 0), poles matched closest pair
+// first; a pole that moves by its own size or more is "set by rounding"
 // (an order above what the data determine leaves such poles beside a G that
 // is right to the last digits). A moved estimate that
 // fails (C_Y not positive definite, step 2 rank deficient) makes both
@@ -974,7 +974,8 @@ RoundingEffect rounding_effect(const FrfData& d, const Bases& b, const Eigen::Ma
     StateSpace moved;
     try {
       Eigen::LLT<Eigen::MatrixXd> llt(moved_CY);
-      if (llt.info() != Eigen::Success) fail(ErrorKind::Numerical, "step 1c", "C_Y moved by rounding is not positive definite");
+      if (llt.info() != Eigen::Success)
+        fail(ErrorKind::Numerical, "step 1c", "C_Y moved by rounding is not positive definite");
       const Eigen::MatrixXd L = llt.matrixL();
       const Eigen::MatrixXd K =
           L.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd(R2.bottomRightCorner(ny, ny).transpose()));
@@ -1074,7 +1075,8 @@ FrfResult estimate_from_r(const FrfData& d, const Bases& b, const Eigen::MatrixX
   res.poles = poles(est);
   // What the model is used for, G and the poles, only where A's entries may
   // have lost accuracy (the warning's threshold): below it, moving the
-  // subspace costs 3 reruns of steps 2-3 for nothing the user would be told.
+  // inputs of step 1c costs 3 reruns of steps 1c-3 for nothing the user
+  // would be told.
   if (assess_rounding && res.error_estimate > kPrecisionWarningLevel) {
     const RoundingEffect e = rounding_effect(d, b, R, n, r, working, res.poles);
     res.rounding_assessed = true;

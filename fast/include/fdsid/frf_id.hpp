@@ -129,10 +129,11 @@ struct FrfResult {
   /// Whether the rounding's effect on Ĝ and the poles was measured (only when
   /// error_estimate exceeds kPrecisionWarningLevel: below it nothing is said).
   bool rounding_assessed = false;
-  /// Similarity-invariant rounding estimates (statistical: step 1c's subspace
-  /// moved by its first-order rounding angle in random directions, steps 2-3
-  /// rerun): the relative error of Ĝ on the data's frequencies, ‖ΔG‖_F/‖G‖_F,
-  /// and the largest relative pole error |Δλ|/|λ|.
+  /// Similarity-invariant rounding estimates (statistical: step 1b's R and
+  /// step 1c's C_Y moved by their backward errors' sizes in random directions,
+  /// steps 1c-3 rerun): the relative error of Ĝ on the data's frequencies,
+  /// ‖ΔG‖_F/‖G‖_F, and the largest relative pole error |Δλ|/|λ|; infinite
+  /// when a moved estimate fails (a warning names the step).
   double g_error_estimate = 0;
   double pole_error_estimate = 0;
   /// The relative error that decides whether the model is usable: the larger
@@ -171,7 +172,7 @@ struct FrfResult {
 /// ω_s in rad/sample, 0 < ω_s < π.
 /// assess_rounding: measure the rounding's effect on Ĝ and the poles when
 /// error_estimate exceeds kPrecisionWarningLevel (FrfResult::rounding_assessed;
-/// 3 more runs of steps 2-3); false for inner loops that read only the model
+/// 3 more runs of steps 1c-3); false for inner loops that read only the model
 /// (Monte Carlo studies, the gap's start values).
 FrfResult identify_frf_fixed(const FrfData& data, int order, int r,
                              ContinuousMethod continuous = ContinuousMethod::Bilinear, double omega_scale = 0,
