@@ -177,13 +177,17 @@ void add_strict_option(CLI::App* sub, bool& strict) {
                 "error is 1 or more: no correct digit)");
 }
 
-std::string unusable_model_warning(const nlohmann::json& model_json, const std::string& path) {
-  if (!model_json.is_object() || !model_json.contains("diagnostics")) return "";
-  const nlohmann::json& d = model_json["diagnostics"];
-  if (!d.is_object() || !d.contains("usable") || !d["usable"].is_boolean() || d["usable"].get<bool>()) return "";
-  return path + " says its estimate is unusable in double precision (diagnostics.usable false: no correct digit in " +
+ModelFile read_model_with_diagnostics(const std::string& path) {
+  ModelFile f;
+  f.json = read_model_file(path);
+  f.model = model_from_json(f.json, path);
+  if (!f.json.is_object() || !f.json.contains("diagnostics")) return f;
+  const nlohmann::json& d = f.json["diagnostics"];
+  if (!d.is_object() || !d.contains("usable") || !d["usable"].is_boolean() || d["usable"].get<bool>()) return f;
+  f.unusable = path + " says its estimate is unusable in double precision (diagnostics.usable false: no correct digit in " +
          "its G or poles), so every number computed from it here may be too; identify it again (see the file's "
          "warnings: --precision high, a lower order or another r)";
+  return f;
 }
 
 bool refused_as_unusable(bool strict, double error_estimate) {

@@ -107,10 +107,16 @@ void add_strict_option(CLI::App* sub, bool& strict);
 /// With --strict and an unusable estimate: one line on stderr, true (the
 /// caller returns 1 before writing anything).
 bool refused_as_unusable(bool strict, double error_estimate);
-/// The warning for a model file whose own diagnostics say it is unusable in
-/// double precision ("usable": false), or "" (validate and gap read such
-/// files; review finding 2 of stop 48: they said nothing).
-std::string unusable_model_warning(const nlohmann::json& model_json, const std::string& path);
+/// A model file as validate, gap and simulate-records read it: its JSON (the
+/// fields beside the model, e.g. "omega_band"), the model, and the warning
+/// when the file's own diagnostics say it is unusable in double precision
+/// ("usable": false; review finding 2 of stop 48: they said nothing), or "".
+struct ModelFile {
+  nlohmann::json json;
+  StateSpace model;
+  std::string unusable;
+};
+ModelFile read_model_with_diagnostics(const std::string& path);
 
 // ---------------------------------------------------------------------------
 // Output

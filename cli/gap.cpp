@@ -256,9 +256,9 @@ int run_gap(const GapCommand& c) {
   refuse_overwrite(c.table_path, {c.model_path, c.data_path, c.meta_path, c.json_path}, "--table");
   Out out{c.json_path == "-"};
   const GapOptions& o = c.options;
-  const nlohmann::json model_json = read_model_file(c.model_path);
-  const StateSpace model = model_from_json(model_json, c.model_path);
-  const std::string unusable = unusable_model_warning(model_json, c.model_path);
+  const ModelFile file = read_model_with_diagnostics(c.model_path);
+  const StateSpace& model = file.model;
+  const std::string& unusable = file.unusable;
   const Records records = read_records(c.data_path, c.meta_path, c.selection);
   const RecordMeta& meta = records.meta;
   const int outputs = static_cast<int>(records.samples.cols()) - records.inputs;

@@ -93,12 +93,12 @@ struct ValidateCommand {
 
 int run_validate(const ValidateCommand& c) {
   refuse_overwrite(c.json_path, {c.model_path, c.data_path, c.meta_path}, "--json");
-  const nlohmann::json model_json = read_model_file(c.model_path);
-  const StateSpace model = model_from_json(model_json, c.model_path);
+  const ModelFile file = read_model_with_diagnostics(c.model_path);
+  const StateSpace& model = file.model;
   const Records rec = read_records(c.data_path, c.meta_path, c.selection);
   std::vector<std::string> warnings;
-  if (std::string w = unusable_model_warning(model_json, c.model_path); !w.empty()) warnings.push_back(std::move(w));
-  if (std::string w = lines_outside_band(model_json, model, rec.meta); !w.empty()) warnings.push_back(std::move(w));
+  if (!file.unusable.empty()) warnings.push_back(file.unusable);
+  if (std::string w = lines_outside_band(file.json, model, rec.meta); !w.empty()) warnings.push_back(std::move(w));
   RecordFit fit;
   try {
     fit = fit_on_record(model, rec);

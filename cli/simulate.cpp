@@ -26,8 +26,8 @@ int run(const SimulateRecordsCommand& c) {
   if (static_cast<long long>(c.options.period) * c.options.periods > 100000000LL)
     throw Error(ErrorKind::Input, "--period", "period x periods above 1e8 samples");
   if (c.out_path == c.meta_path) throw Error(ErrorKind::Input, "--meta-out", "must differ from --out");
-  const nlohmann::json model_json = read_model_file(c.model_path);
-  const StateSpace model = model_from_json(model_json, c.model_path);
+  const ModelFile file = read_model_with_diagnostics(c.model_path);
+  const StateSpace& model = file.model;
   RecordMeta meta;
   const Eigen::MatrixXd rec = simulate_periodic_record(model, c.options, meta);
   // A resonance of the model outside the excited lines (review finding 29:
@@ -44,7 +44,7 @@ int run(const SimulateRecordsCommand& c) {
                                       " of P = " + std::to_string(meta.period) + " (--lines" +
                                       (c.options.lines.empty() ? "; default: odd lines below P/4" : "") + ")");
   }
-  const std::string unusable = unusable_model_warning(model_json, c.model_path);
+  const std::string& unusable = file.unusable;
   std::vector<std::string> warnings;  // the JSON's: the band's without "the model's"
   if (!unusable.empty()) warnings.push_back(unusable);
   if (!outside.empty()) warnings.push_back(outside);

@@ -291,6 +291,7 @@ struct Step1 {
   Eigen::VectorXd sigma;   // its singular values
   double r11_condition = 1; // cond₁(R11): conditioning of the input part (Π of Eq. 20)
   double noise_scale = 0;   // ‖L⁻¹‖₁ ‖R‖_F: rounding of the QR of all of Z, whitened
+  Eigen::MatrixXd CY;       // C_Y of Eq. (18) (the rounding estimate moves it)
 };
 
 // Step 1's size checks.
@@ -457,7 +458,9 @@ Step1 step1c_whitened_svd(const Eigen::MatrixXd& CY, const Eigen::MatrixXd& R, i
 Step1 step1c(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, int r) {
   const int nu = r * d.inputs();
   const double r11_cond = triangular_condition(R.topLeftCorner(nu, nu));
-  Step1 s = step1c_whitened_svd(step1c_noise_covariance(d, b, r), R, r, d, b);
+  Eigen::MatrixXd CY = step1c_noise_covariance(d, b, r);
+  Step1 s = step1c_whitened_svd(CY, R, r, d, b);
+  s.CY = std::move(CY);
   s.r11_condition = r11_cond;
   return s;
 }
@@ -886,17 +889,6 @@ StateSpace in_data_domain(StateSpace est, const FrfData& d, const Bases& b) {
   return est;
 }
 
-// G = C (ξ_k I − A)⁻¹ B + D at the bases' ξ_k, all frequencies.
-std::vector<Eigen::MatrixXcd> response_on_grid(const StateSpace& est, const Bases& b, int F) {
-  Resolvent res(est.A, est.C);
-  res.set_input(est.B, est.D);
-  std::vector<Eigen::MatrixXcd> G(F);
-  Eigen::MatrixXcd K;
-  for (int k = 0; k < F; ++k)
-    if (!res.response(b.xi(k), G[k], K)) G[k].setConstant(cplx(std::numeric_limits<double>::infinity()));
-  return G;
-}
-
 // Purpose: the relative rounding error of what the estimate is used for — Ĝ
 // on the data's frequencies and the poles — rather than of Â's entries, which
 // depend on the basis the subspace happens to fix (review finding 2 of stop
@@ -924,8 +916,8 @@ std::vector<Eigen::MatrixXcd> response_on_grid(const StateSpace& est, const Base
 //    step 1c by far more than its entries move: the F-16's order-10 estimate
 //    at r = 48 differs from the 50-digit one mainly through it (moving R
 //    alone gave 6e-9, the distance is 3.3e-3).
-// Changes are measured as ‖ΔG‖_F / ‖G‖_F over the grid (all channels; G in
-// the bases' variable, equal to the model's G at the data's frequencies)
+// Changes are measured as ‖ΔG‖_F / ‖G‖_F over the data's frequencies (all
+// channels)
 // and, per pole, |Δλ|/|λ| (|Δλ| for λ = 0), poles matched closest pair
 // first; a pole that moves by its own size or more is "set by rounding"
 // (an order above what the data determine leaves such poles beside a G that
@@ -945,15 +937,14 @@ struct RoundingEffect {
   std::string failure;             // why a moved estimate failed (then g = poles = ∞), or ""
 };
 
-RoundingEffect rounding_effect(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, int n, int r,
-                               const StateSpace& working, const Eigen::VectorXcd& base_poles) {
+RoundingEffect rounding_effect(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, const Eigen::MatrixXd& CY,
+                               int n, int r, const StateSpace& est, const Eigen::VectorXcd& base_poles) {
   const int F = d.frequencies();
-  const std::vector<Eigen::MatrixXcd> G0 = response_on_grid(working, b, F);
+  const std::vector<Eigen::MatrixXcd> G0 = frequency_response(est, d.omega);
   double g0 = 0;
   for (const auto& g : G0) g0 += g.squaredNorm();
   const double gamma = kUnitRoundoff * std::sqrt(2.0 * F * d.columns());
   const double gamma_cy = kUnitRoundoff * std::sqrt(static_cast<double>(F));
-  const Eigen::MatrixXd CY = step1c_noise_covariance(d, b, r);
   const Eigen::Index ny = CY.rows(), cols = R.cols();
   RoundingEffect out;
   std::vector<double> pole_error(base_poles.size(), 0.0);
@@ -980,12 +971,11 @@ RoundingEffect rounding_effect(const FrfData& d, const Bases& b, const Eigen::Ma
       const Eigen::MatrixXd K =
           L.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd(R2.bottomRightCorner(ny, ny).transpose()));
       const Eigen::MatrixXd U = Eigen::JacobiSVD<Eigen::MatrixXd>(K, Eigen::ComputeThinU).matrixU().leftCols(n);
-      moved = steps_2_3(d, b, L.triangularView<Eigen::Lower>() * U, n, r);
-      const std::vector<Eigen::MatrixXcd> G = response_on_grid(moved, b, F);
+      moved = in_data_domain(steps_2_3(d, b, L.triangularView<Eigen::Lower>() * U, n, r), d, b);
+      const std::vector<Eigen::MatrixXcd> G = frequency_response(moved, d.omega);
       double dg = 0;
       for (int k = 0; k < F; ++k) dg += (G[k] - G0[k]).squaredNorm();
       out.g = std::max(out.g, g0 > 0 ? std::sqrt(dg / g0) : 0.0);
-      moved = in_data_domain(moved, d, b);
     } catch (const Error& e) {  // the moved estimate fails where this one did not: nothing is determined
       out.g = out.poles = std::numeric_limits<double>::infinity();
       out.failure = e.what();
@@ -1052,9 +1042,8 @@ FrfResult estimate_from_r(const FrfData& d, const Bases& b, const Eigen::MatrixX
   const Eigen::MatrixXd O = s1.L.triangularView<Eigen::Lower>() * s1.Usvd.leftCols(n);
   Eigen::VectorXd top_sv;
   double step3_condition = 1;
-  const StateSpace working = steps_2_3(d, b, O, n, r, &top_sv, &step3_condition);
   FrfResult res;
-  const StateSpace est = res.model = in_data_domain(working, d, b);
+  const StateSpace est = res.model = in_data_domain(steps_2_3(d, b, O, n, r, &top_sv, &step3_condition), d, b);
   if (d.domain == Domain::Continuous || b.tustin) res.omega_scale = b.omega_scale;
   res.order = n;
   res.r = r;
@@ -1078,7 +1067,7 @@ FrfResult estimate_from_r(const FrfData& d, const Bases& b, const Eigen::MatrixX
   // inputs of step 1c costs 3 reruns of steps 1c-3 for nothing the user
   // would be told.
   if (assess_rounding && res.error_estimate > kPrecisionWarningLevel) {
-    const RoundingEffect e = rounding_effect(d, b, R, n, r, working, res.poles);
+    const RoundingEffect e = rounding_effect(d, b, R, s1.CY, n, r, est, res.poles);
     res.rounding_assessed = true;
     res.g_error_estimate = e.g;
     res.pole_error_estimate = e.poles;
