@@ -25,6 +25,7 @@
 #include "fdsid/frf_id.hpp"
 #include "frf_tolerance.hpp"
 #include "rc_generators.hpp"
+#include "statistics.hpp"
 #include "tolerance.hpp"
 
 namespace fdsid::testing {
@@ -103,40 +104,6 @@ double rms(const std::vector<double>& e) {
   return std::sqrt(acc / e.size());
 }
 
-// Mann–Whitney: U = #{(i, j): a_i < b_j} and P(U ≥ u) when the n + m values
-// are exchangeable (continuous, so no ties). Exact: N(n, m, u), the number of
-// orderings of n a's and m b's with U = u, obeys
-// N(n, m, u) = N(n, m − 1, u − n) + N(n − 1, m, u) (the largest value is a b,
-// above all n a's, or an a, above every b), N(n, 0, 0) = N(0, m, 0) = 1;
-// divided by C(n + m, n), exact in doubles while that is below 2⁵³.
-// If instead a is stochastically larger than b, U is smaller and P(U ≥ u)
-// smaller still: the p-value is valid for that composite hypothesis.
-double mann_whitney_p_value(const std::vector<double>& a, const std::vector<double>& b) {
-  const int n = static_cast<int>(a.size()), m = static_cast<int>(b.size());
-  int u = 0;
-  for (double x : a)
-    for (double y : b) u += x < y;
-  // count[i][j][v]: N(i, j, v), built up in i and j.
-  std::vector<std::vector<std::vector<double>>> count(n + 1, std::vector<std::vector<double>>(m + 1));
-  for (int i = 0; i <= n; ++i)
-    for (int j = 0; j <= m; ++j) {
-      count[i][j].assign(i * j + 1, 0.0);
-      if (i == 0 || j == 0) {
-        count[i][j][0] = 1;
-        continue;
-      }
-      for (int v = 0; v <= i * j; ++v)
-        count[i][j][v] = (v >= i && v - i <= i * (j - 1) ? count[i][j - 1][v - i] : 0.0) +
-                         (v <= (i - 1) * j ? count[i - 1][j][v] : 0.0);
-    }
-  double tail = 0, total = 0;
-  for (int v = 0; v <= n * m; ++v) {
-    total += count[n][m][v];
-    if (v >= u) tail += count[n][m][v];
-  }
-  return tail / total;
-}
-
 RC_GTEST_PROP(FrfConsistency, GErrorShrinksLikeOneOverSqrtF, ()) {
   // Theorems 1 and 2: the error at F = 800 is 1/4 of that at F = 50.
   // The second-order terms are ≤ 10 % of the first at F = 50 (noise_variance)
@@ -168,7 +135,7 @@ RC_GTEST_PROP(FrfConsistency, GErrorShrinksLikeOneOverSqrtF, ()) {
   const StateSpace sys = make_system(spec);
   const int n = sys.order(), r = 2 * n + 2, S = 12, M = 4, S_sample = 24;
   const std::uint64_t seed = *rc::gen::inRange<std::uint64_t>(0, 1000000);
-  const double z_tail = 3.4e-6, bias = 0.9 / 1.1;
+  const double alpha = 3.4e-6, bias = 0.9 / 1.1;
   RC_LOG() << spec << "\nseed " << seed << ", sigma " << std::sqrt(noise_variance(sys))
            << ", smallest Hankel singular value " << smallest_hankel_singular_value(sys) << "\n";
 
@@ -188,8 +155,8 @@ RC_GTEST_PROP(FrfConsistency, GErrorShrinksLikeOneOverSqrtF, ()) {
   for (double& e : scaled50) e /= c;
   const double p = mann_whitney_p_value(scaled50, s800);
   RC_LOG() << "sample variance, M = 4: error F=50 / " << c << " below error F=800 with p " << p << " (>= "
-           << z_tail << ")\n";
-  RC_ASSERT(p >= z_tail);
+           << alpha << ")\n";
+  RC_ASSERT(p >= alpha);
 }
 
 }  // namespace
