@@ -325,14 +325,15 @@ int run(const IdentifyFrfCommand& c) {
   if (c.refine || !stabilised.empty()) {
     res.poles = poles(res.model);
     drop_subspace_model_warnings(res, c.refine);
-    if (c.refine) {  // the ML optimum does not inherit the subspace estimate's rounding; its own: u κ(J)
+    if (c.refine) {  // the ML optimum does not inherit the subspace estimate's rounding; its own (refine_ml warns)
       res.condition = refined.condition;
-      res.rounding_assessed = false;
       res.error_estimate = std::numeric_limits<double>::epsilon() / 2 * refined.condition;  // u κ
-      if (const std::string w = precision_warning(res.error_estimate, "the refined parameters",
-                                                  "condition of the Jacobian " + fmt(refined.condition, 3));
-          !w.empty())
-        res.warnings.push_back(w);
+      res.error_estimate_of = "the refined modal parameters (u x the Jacobian's condition, a first-order bound)";
+      res.rounding_assessed = true;
+      res.g_error_estimate = refined.g_error_estimate;
+      res.pole_error_estimate = refined.pole_error_estimate;
+      res.rounding_moves = "the residuals and the Jacobian at the ML optimum moved by their rounding in random "
+                           "directions, one Gauss-Newton step each";
     }
     // No instability warning to recompute: reflection leaves no unstable pole,
     // the refinement keeps none, and refine_ml names those --allow-unstable kept.

@@ -18,6 +18,7 @@
 #include "numerics/qr.hpp"
 #include "numerics/rank.hpp"
 #include "numerics/eigen_instances.hpp"
+#include "rounding.hpp"
 
 namespace fdsid {
 
@@ -916,38 +917,23 @@ StateSpace in_data_domain(StateSpace est, const FrfData& d, const Bases& b) {
 //    step 1c by far more than its entries move: the F-16's order-10 estimate
 //    at r = 48 differs from the 50-digit one mainly through it (moving R
 //    alone gave 6e-9, the distance is 3.3e-3).
-// Changes are measured as ‖ΔG‖_F / ‖G‖_F over the data's frequencies (all
-// channels)
-// and, per pole, |Δλ|/|λ| (|Δλ| for λ = 0), poles matched closest pair
-// first; a pole that moves by its own size or more is "set by rounding"
-// (an order above what the data determine leaves such poles beside a G that
-// is right to the last digits). A moved estimate that
+// Changes are measured by RoundingEffect (rounding.hpp): G on the data's
+// frequencies and each pole; a pole that moves by its own size or more is
+// "set by rounding" (an order above what the data determine leaves such
+// poles beside a G that is right to the last digits). A moved estimate that
 // fails (C_Y not positive definite, step 2 rank deficient) makes both
 // infinite: rounding alone decides whether there is an estimate. Steps 2-3
 // are backward stable; their rounding perturbs Ô by ~u relative, inside
 // these moves. An estimate of the typical error, not a bound; measured
 // against the 50-digit reference on the F-16 (orders 10 at r = 30, 48: 5-20
 // times the distance) and in the tests.
-constexpr int kRoundingSamples = 3;
-
-struct RoundingEffect {
-  double g = 0;                    // relative error of Ĝ on the grid
-  double poles = 0;                // the largest pole error
-  std::vector<cplx> undetermined;  // poles whose error is 1 or more
-  std::string failure;             // why a moved estimate failed (then g = poles = ∞), or ""
-};
-
 RoundingEffect rounding_effect(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, const Eigen::MatrixXd& CY,
-                               int n, int r, const StateSpace& est, const Eigen::VectorXcd& base_poles) {
+                               int n, int r, const StateSpace& est) {
   const int F = d.frequencies();
-  const std::vector<Eigen::MatrixXcd> G0 = frequency_response(est, d.omega);
-  double g0 = 0;
-  for (const auto& g : G0) g0 += g.squaredNorm();
   const double gamma = kUnitRoundoff * std::sqrt(2.0 * F * d.columns());
   const double gamma_cy = kUnitRoundoff * std::sqrt(static_cast<double>(F));
   const Eigen::Index ny = CY.rows(), cols = R.cols();
-  RoundingEffect out;
-  std::vector<double> pole_error(base_poles.size(), 0.0);
+  RoundingEffect out(est, d.omega);
   std::mt19937_64 rng(0x5ca1ab1eULL);
   std::normal_distribution<double> normal(0.0, 1.0);
   for (int sample = 0; sample < kRoundingSamples; ++sample) {
@@ -962,7 +948,6 @@ RoundingEffect rounding_effect(const FrfData& d, const Bases& b, const Eigen::Ma
     for (Eigen::Index i = 0; i < ny; ++i)
       for (Eigen::Index j = 0; j <= i; ++j)
         moved_CY(j, i) = moved_CY(i, j) += gamma_cy * std::sqrt(CY(i, i) * CY(j, j)) * normal(rng);
-    StateSpace moved;
     try {
       Eigen::LLT<Eigen::MatrixXd> llt(moved_CY);
       if (llt.info() != Eigen::Success)
@@ -971,60 +956,13 @@ RoundingEffect rounding_effect(const FrfData& d, const Bases& b, const Eigen::Ma
       const Eigen::MatrixXd K =
           L.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd(R2.bottomRightCorner(ny, ny).transpose()));
       const Eigen::MatrixXd U = Eigen::JacobiSVD<Eigen::MatrixXd>(K, Eigen::ComputeThinU).matrixU().leftCols(n);
-      moved = in_data_domain(steps_2_3(d, b, L.triangularView<Eigen::Lower>() * U, n, r), d, b);
-      const std::vector<Eigen::MatrixXcd> G = frequency_response(moved, d.omega);
-      double dg = 0;
-      for (int k = 0; k < F; ++k) dg += (G[k] - G0[k]).squaredNorm();
-      out.g = std::max(out.g, g0 > 0 ? std::sqrt(dg / g0) : 0.0);
+      out.add(in_data_domain(steps_2_3(d, b, L.triangularView<Eigen::Lower>() * U, n, r), d, b));
     } catch (const Error& e) {  // the moved estimate fails where this one did not: nothing is determined
-      out.g = out.poles = std::numeric_limits<double>::infinity();
-      out.failure = e.what();
+      out.fail(e.what());
       return out;
     }
-    // Matched closest pair first (a pole set by rounding can land beside a
-    // determined one; matching in the base poles' order then paired them).
-    const Eigen::VectorXcd q = poles(moved);
-    std::vector<std::tuple<double, Eigen::Index, Eigen::Index>> pairs;
-    for (Eigen::Index i = 0; i < base_poles.size(); ++i) {
-      const double scale = std::abs(base_poles(i)) > 0 ? std::abs(base_poles(i)) : 1.0;
-      for (Eigen::Index j = 0; j < q.size(); ++j) pairs.emplace_back(std::abs(q(j) - base_poles(i)) / scale, i, j);
-    }
-    std::sort(pairs.begin(), pairs.end());
-    std::vector<bool> base_done(base_poles.size(), false), used(q.size(), false);
-    for (const auto& [err, i, j] : pairs) {
-      if (base_done[i] || used[j]) continue;
-      base_done[i] = used[j] = true;
-      pole_error[i] = std::max(pole_error[i], err);
-    }
-  }
-  for (size_t i = 0; i < pole_error.size(); ++i) {
-    out.poles = std::max(out.poles, pole_error[i]);
-    if (!usable_precision(pole_error[i])) out.undetermined.push_back(base_poles(static_cast<Eigen::Index>(i)));
   }
   return out;
-}
-
-// The precision warning for the rounding effect (empty below
-// kPrecisionWarningLevel), naming the poles set by rounding.
-std::string rounding_warning(const RoundingEffect& e, double a_bound) {
-  if (!e.failure.empty())
-    return "UNUSABLE in double precision: step 1b's R and step 1c's C_Y moved by their rounding make the estimate "
-           "fail (" + e.failure + "): rounding alone decides whether it exists (A's entries in the estimate's basis: "
-           "bound " + fmt(a_bound, 3) + "); use --precision high, a lower order or another r (--strict: exit 1)";
-  const bool poles_worse = e.poles > e.g;
-  const std::string details = std::string(poles_worse ? "G on the data's frequencies " + fmt(e.g, 3)
-                                                      : "poles " + fmt(e.poles, 3)) +
-                              "; step 1b's R and step 1c's C_Y moved by their rounding in " +
-                              std::to_string(kRoundingSamples) +
-                              " random directions; A's entries in the estimate's basis: bound " + fmt(a_bound, 3);
-  std::string w = precision_warning(std::max(e.g, e.poles), poles_worse ? "the poles" : "G on the data's frequencies",
-                                    details, PrecisionEstimate::Statistical);
-  if (e.undetermined.empty() || w.empty()) return w;
-  w += "; set by rounding, not by the data (each moves by its own size or more):";
-  for (const cplx& z : e.undetermined) w += " " + pole_text(z);
-  if (e.g <= kPrecisionWarningLevel)
-    w += " — G is right to 6 or more digits: the order is above what the data determine (try a lower --order)";
-  return w;
 }
 
 // identify_frf_fixed from step 1c on: the estimate of order n from R of step
@@ -1067,11 +1005,14 @@ FrfResult estimate_from_r(const FrfData& d, const Bases& b, const Eigen::MatrixX
   // inputs of step 1c costs 3 reruns of steps 1c-3 for nothing the user
   // would be told.
   if (assess_rounding && res.error_estimate > kPrecisionWarningLevel) {
-    const RoundingEffect e = rounding_effect(d, b, R, s1.CY, n, r, est, res.poles);
+    const RoundingEffect e = rounding_effect(d, b, R, s1.CY, n, r, est);
     res.rounding_assessed = true;
     res.g_error_estimate = e.g;
     res.pole_error_estimate = e.poles;
-    if (const std::string w = rounding_warning(e, res.error_estimate); !w.empty()) res.warnings.push_back(w);
+    if (const std::string w = rounding_warning(e, "step 1b's R and step 1c's C_Y",
+                                               "A's entries in the estimate's basis: bound " + fmt(res.error_estimate, 3));
+        !w.empty())
+      res.warnings.push_back(w);
   }
   res.v_sub = v_sub(est, d);
   const std::string unstable = instability_warning(est.domain, res.poles);

@@ -820,7 +820,7 @@ nlohmann::json frf_result_to_json(const FrfResult& r, const std::string& method)
   j["r_scan"] = scan;
   j["diagnostics"] = {{"condition", r.condition},
                       {"error_estimate", r.error_estimate},
-                      {"error_estimate_of", "A's entries in the estimate's basis (u x condition, a first-order bound)"},
+                      {"error_estimate_of", r.error_estimate_of},
                       {"usable", usable_precision(r.usability_estimate())},
                       {"noise_edge", r.noise_edge}};
   if (r.rounding_assessed) {
@@ -828,8 +828,7 @@ nlohmann::json frf_result_to_json(const FrfResult& r, const std::string& method)
     j["diagnostics"]["g_error_estimate"] = r.g_error_estimate;
     j["diagnostics"]["pole_error_estimate"] = r.pole_error_estimate;
     j["diagnostics"]["usable_from"] =
-        "the larger of g_error_estimate (G on the data's frequencies) and pole_error_estimate: "
-        "R of step 1b and C_Y of step 1c moved by their rounding in random directions, steps 1c-3 rerun";
+        "the larger of g_error_estimate (G on the data's frequencies) and pole_error_estimate: " + r.rounding_moves;
   }
   j["warnings"] = r.warnings;
   return j;

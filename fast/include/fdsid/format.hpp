@@ -34,9 +34,16 @@ enum class PrecisionEstimate { FirstOrderBound, Statistical };
 /// significant digits", d = ⌊−log10 estimate⌋ (said to be a bound, often
 /// pessimistic, or a statistical estimate, as `kind` says), "its order of
 /// magnitude" for d = 0; 1 or more, or not finite, "UNUSABLE …": no digit is
-/// certain. `what` names the quantity and `details` the condition numbers.
+/// certain. `what` names the quantity and `details` the condition numbers;
+/// `advice` is what the user can do: compare with it (usable) or use it
+/// instead (unusable).
+struct PrecisionAdvice {
+  std::string compare = "compare with --precision high";
+  std::string instead = "use --precision high, a lower order or another r";
+};
 std::string precision_warning(double estimate, const std::string& what, const std::string& details,
-                              PrecisionEstimate kind = PrecisionEstimate::FirstOrderBound);
+                              PrecisionEstimate kind = PrecisionEstimate::FirstOrderBound,
+                              const PrecisionAdvice& advice = {});
 
 /// Whether an estimate with this relative error estimate has a correct digit (< 1).
 inline bool usable_precision(double estimate) { return estimate < 1.0; }

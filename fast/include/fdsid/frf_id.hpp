@@ -136,6 +136,12 @@ struct FrfResult {
   /// when a moved estimate fails (a warning names the step).
   double g_error_estimate = 0;
   double pole_error_estimate = 0;
+  /// What error_estimate bounds and what was moved for the G and pole
+  /// estimates (the JSON's error_estimate_of and usable_from): the subspace
+  /// estimate's here; the ML refinement's when identify-frf refines.
+  std::string error_estimate_of = "A's entries in the estimate's basis (u x condition, a first-order bound)";
+  std::string rounding_moves =
+      "R of step 1b and C_Y of step 1c moved by their rounding in random directions, steps 1c-3 rerun";
   /// The relative error that decides whether the model is usable: the larger
   /// of the G and pole estimates when assessed, else error_estimate.
   double usability_estimate() const {

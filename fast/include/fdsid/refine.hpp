@@ -84,6 +84,12 @@ struct RefineResult {
   /// κ = σ_1/σ_q of the Jacobian on the determined directions: u κ is the first-order relative
   /// rounding error of the parameters (the Gauss–Newton normal equations solved by QR).
   double condition = 0;
+  /// The rounding's effect on what the model is used for (statistical: the residuals and the Jacobian at the
+  /// optimum moved by their rounding in random directions, one Gauss–Newton step each): the relative error of Ĝ
+  /// on the data's frequencies, ‖ΔG‖_F/‖G‖_F, and the largest relative pole error |Δλ|/|λ|. They decide
+  /// whether the model is usable (a warning above 1e-6), not u κ, which the least determined parameter sets.
+  double g_error_estimate = 0;
+  double pole_error_estimate = 0;
   std::vector<PoleUncertainty> poles;
   /// Standard deviation of |G_ij| and ∠G_ij (rad) at each of the data's frequencies, [k](i, j).
   std::vector<Eigen::MatrixXd> magnitude_sd, phase_sd;

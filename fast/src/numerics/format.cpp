@@ -39,7 +39,7 @@ size_t edit_distance(const std::string& a, const std::string& b) {
 std::string p_text(double p, int digits) { return p < 1e-300 ? std::string("< 1e-300") : sci(p, digits); }
 
 std::string precision_warning(double estimate, const std::string& what, const std::string& details,
-                              PrecisionEstimate kind) {
+                              PrecisionEstimate kind, const PrecisionAdvice& advice) {
   if (estimate <= kPrecisionWarningLevel) return "";
   if (usable_precision(estimate)) {
     const int digits = static_cast<int>(std::floor(-std::log10(estimate)));
@@ -49,10 +49,10 @@ std::string precision_warning(double estimate, const std::string& what, const st
                        : std::to_string(digits) + " significant digit" + (digits == 1 ? "" : "s")) +
            (kind == PrecisionEstimate::FirstOrderBound ? " (a first-order bound; the true error is often smaller)"
                                                        : " (a statistical estimate from rounding-size perturbations)") +
-           "; compare with --precision high";
+           "; " + advice.compare;
   }
   return "UNUSABLE in double precision: estimated relative error of " + what + " " + fmt(estimate, 3) + " (" + details +
-         ") leaves no correct digit; use --precision high, a lower order or another r (--strict: exit 1)";
+         ") leaves no correct digit; " + advice.instead + " (--strict: exit 1)";
 }
 
 }  // namespace fdsid
