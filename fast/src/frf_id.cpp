@@ -8,7 +8,6 @@
 #include <limits>
 #include <random>
 #include <set>
-#include <tuple>
 
 #include "fdsid/error.hpp"
 #include "numerics/complex.hpp"

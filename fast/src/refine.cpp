@@ -605,7 +605,8 @@ RoundingEffect refined_rounding_effect(const FrfData& d, const Layout& lay, cons
       }
   }
   const int q = res.free_parameters;
-  const double gamma_r = numerics::kUnitRoundoff * std::sqrt(2.0 * (modes + 2)), gamma_j = numerics::kUnitRoundoff * std::sqrt(12.0);
+  const double gamma_r = numerics::kUnitRoundoff * std::sqrt(2.0 * (modes + 2));
+  const double gamma_j = numerics::kUnitRoundoff * std::sqrt(12.0);
   RoundingEffect out(model, d.omega);
   std::mt19937_64 rng(0x5ca1ab1eULL);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -616,9 +617,10 @@ RoundingEffect refined_rounding_effect(const FrfData& d, const Layout& lay, cons
       for (Eigen::Index t = 0; t < J.cols(); ++t) g(t) += gamma_j * std::abs(J(i, t)) * normal(rng) * r(i);
     }
     Eigen::VectorXd moved = th;
-    for (int i = 0; i < q; ++i)
-      if (svd.singularValues()(i) > 0)
-        moved -= svd.matrixV().col(i) * (svd.matrixV().col(i).dot(g) / (svd.singularValues()(i) * svd.singularValues()(i)));
+    for (int i = 0; i < q; ++i) {
+      const double sv = svd.singularValues()(i);
+      if (sv > 0) moved -= svd.matrixV().col(i) * (svd.matrixV().col(i).dot(g) / (sv * sv));
+    }
     const StateSpace moved_model = lay.unpack(moved.data(), res.start);
     if (!moved_model.A.allFinite() || !moved_model.B.allFinite() || !moved_model.C.allFinite()) {
       out.fail("the moved parameters are not finite");
@@ -683,8 +685,8 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
   res.condition = q > 0 && sv(q - 1) > 0 ? sv(0) / sv(q - 1) : std::numeric_limits<double>::infinity();
   // What the model is used for, G and the poles (u κ(J) is the parameters'):
   const RoundingEffect rounding = refined_rounding_effect(
-      data, lay, res, opt, J_cost, has_input_noise(opt) ? Eigen::BDCSVD<Eigen::MatrixXd>(J_cost, Eigen::ComputeThinV) : svd,
-      residuals, th);
+      data, lay, res, opt, J_cost,
+      has_input_noise(opt) ? Eigen::BDCSVD<Eigen::MatrixXd>(J_cost, Eigen::ComputeThinV) : svd, residuals, th);
   res.g_error_estimate = rounding.g;
   res.pole_error_estimate = rounding.poles;
   if (const std::string w = rounding_warning(

@@ -129,9 +129,9 @@ struct FrfResult {
   /// Whether the rounding's effect on Ĝ and the poles was measured (only when
   /// error_estimate exceeds kPrecisionWarningLevel: below it nothing is said).
   bool rounding_assessed = false;
-  /// Similarity-invariant rounding estimates (statistical: step 1b's R and
-  /// step 1c's C_Y moved by their backward errors' sizes in random directions,
-  /// steps 1c-3 rerun): the relative error of Ĝ on the data's frequencies,
+  /// Similarity-invariant rounding estimates (statistical: what
+  /// rounding_moves names moved by its rounding's size in random directions,
+  /// the estimate recomputed): the relative error of Ĝ on the data's frequencies,
   /// ‖ΔG‖_F/‖G‖_F, and the largest relative pole error |Δλ|/|λ|; infinite
   /// when a moved estimate fails (a warning names the step).
   double g_error_estimate = 0;
