@@ -353,6 +353,7 @@ int run(const IdentifyFrfCommand& c) {
       << (source.periods > 0 ? ", M = " + std::to_string(source.periods) + " periods" : std::string())
       << ", r = " << res.r << (o.r == 0 ? " (minimising V_SUB)" : "") << "\n";
   print_poles(out, res.poles);
+  for (const std::string& n : res.notes) out << "note: " << n << "\n";
   if (!stabilised.empty()) out << "note: " << stabilised << "\n";
   if (c.refine) print_refinement(out, refined, ro, res.model.domain, res.model.sample_time);
   FitVerdict fit = fit_verdict(res, data, source);

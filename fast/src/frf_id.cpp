@@ -1071,6 +1071,7 @@ struct AutomaticOrder {
   Eigen::VectorXd sigma;  // the singular values it was read from
   double edge = 0;        // Marchenko–Pastur edge of whitened noise (0 without a noise model)
   std::string capped;     // a warning when it stopped at the top of its range, else empty
+  std::string lowered;    // a note when the default r was lowered to one step 1 can use, else empty
 };
 
 // Purpose: n_a when the options leave it to the data.
@@ -1085,8 +1086,32 @@ AutomaticOrder automatic_order(const FrfData& d, const FrfOptions& o, int r_feas
   a.order_r = o.r > 0 ? o.r : std::min(20, r_feasible);
   if (a.order_r < 2)
     fail(ErrorKind::Dimension, "order", "too few frequencies (" + std::to_string(F) + ") to read an order");
+  // The default r = 20 can exceed what the band carries: 20 powers of z on
+  // half of the unit circle are numerically dependent (C_Y, a Toeplitz matrix
+  // of them, loses positive definiteness; the cubic-feedback circuit's oddms
+  // record, 49.8 % of [0, pi]). Step 1 fails only through that dependence
+  // (C_Y or R11; Error(Numerical)), so the default steps down to the largest r
+  // it can use and says so; an r the user gave is never changed.
+  const int r_default = a.order_r;
+  for (;;) {
+    try {
+      a.sigma = frf_singular_values(d, a.order_r, o.continuous, o.omega_scale, o.discrete);
+      break;
+    } catch (const Error& e) {
+      if (o.r > 0 || e.kind() != ErrorKind::Numerical || a.order_r == 2) throw;
+      // The failure's first clause ("step 1c: C_Y ... is not positive definite"), without its advice to lower r.
+      if (a.lowered.empty()) a.lowered = e.where() + ": " + e.message().substr(0, e.message().find(": "));
+      --a.order_r;
+    }
+  }
+  if (!a.lowered.empty())
+    a.lowered = "the order was read at r = " + std::to_string(a.order_r) + ", not the default " +
+                std::to_string(r_default) + ": step 1 failed at r = " + std::to_string(a.order_r + 1) +
+                (a.order_r + 1 < r_default ? " ... " + std::to_string(r_default) : std::string()) +
+                ", where the basis functions are numerically dependent on the data's band (at r = " +
+                std::to_string(r_default) + ", " + a.lowered + ")";
   const int n_max = o.max_order > 0 ? std::min(o.max_order, a.order_r * p - 1) : std::min(20, a.order_r * p - 1);
-  const Eigen::VectorXd& sv = a.sigma = frf_singular_values(d, a.order_r, o.continuous, o.omega_scale, o.discrete);
+  const Eigen::VectorXd& sv = a.sigma;
   if (d.has_noise_model) {
     // Whitened noise (C_Y = E[𝐍^re 𝐍^reᵀ]) has squared singular values
     // spread over the Marchenko–Pastur law of ratio γ = r p / (F c) (F c
@@ -1175,6 +1200,7 @@ FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
     best.order_r = automatic.order_r;
   }
   best.noise_edge = automatic.edge;
+  if (!automatic.lowered.empty()) best.notes.push_back(automatic.lowered);
   if (!automatic.capped.empty()) {
     best.warnings.push_back(automatic.capped);
     best.order_at_search_cap = true;

@@ -831,6 +831,7 @@ nlohmann::json frf_result_to_json(const FrfResult& r, const std::string& method)
         "the larger of g_error_estimate (G on the data's frequencies) and pole_error_estimate: " + r.rounding_moves;
   }
   j["warnings"] = r.warnings;
+  j["notes"] = r.notes;
   return j;
 }
 

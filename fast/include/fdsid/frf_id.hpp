@@ -150,6 +150,10 @@ struct FrfResult {
   /// Plain-language warnings where fast/ may lose accuracy (error_estimate
   /// above 1e-6). Printed by the CLI and written to the JSON.
   std::vector<std::string> warnings;
+  /// Plain-language notes on choices made for the user where nothing is wrong
+  /// (the automatic order read at a lower r than the default). Printed by the
+  /// CLI as "note:" and written to the JSON's "notes".
+  std::vector<std::string> notes;
   /// Noise level of step 1c's squared singular values (Marchenko–Pastur edge of
   /// whitened noise) used by the automatic order selection; 0 when unused.
   double noise_edge = 0;
