@@ -114,6 +114,8 @@ nlohmann::json refinement_json(const RefineResult& r, const RefineOptions& o) {
             {"free_parameters", r.free_parameters},
             {"iterations", r.iterations},
             {"termination", r.termination},
+            {"g_stopping_estimate", r.g_stopping_estimate},
+            {"pole_stopping_estimate", r.pole_stopping_estimate},
             {"at_stability_bound", r.at_stability_bound}};
   if (noise != RefineNoise::None) {
     j["expected_cost"] = r.expected_cost;
@@ -330,10 +332,13 @@ int run(const IdentifyFrfCommand& c) {
       res.error_estimate = std::numeric_limits<double>::epsilon() / 2 * refined.condition;  // u κ
       res.error_estimate_of = "the refined modal parameters (u x the Jacobian's condition, a first-order bound)";
       res.rounding_assessed = true;
-      res.g_error_estimate = refined.g_error_estimate;
-      res.pole_error_estimate = refined.pole_error_estimate;
+      // The refined model is usable to the digits both the rounding and the
+      // optimiser's stopping leave (refinement.g/pole_stopping_estimate).
+      res.g_error_estimate = std::max(refined.g_error_estimate, refined.g_stopping_estimate);
+      res.pole_error_estimate = std::max(refined.pole_error_estimate, refined.pole_stopping_estimate);
       res.rounding_moves = "the residuals and the Jacobian at the ML optimum moved by their rounding in random "
-                           "directions, one Gauss-Newton step each";
+                           "directions, one Gauss-Newton step each; and one more Gauss-Newton step from the result "
+                           "(the optimiser's stopping error), the larger";
     }
     // No instability warning to recompute: reflection leaves no unstable pole,
     // the refinement keeps none, and refine_ml names those --allow-unstable kept.

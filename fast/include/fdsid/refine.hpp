@@ -90,6 +90,11 @@ struct RefineResult {
   /// whether the model is usable (a warning above 1e-6), not u κ, which the least determined parameter sets.
   double g_error_estimate = 0;
   double pole_error_estimate = 0;
+  /// How far short of the optimum the optimiser stopped: the same relative changes of Ĝ and the poles under
+  /// one more Gauss–Newton step from the result, −(JᵀJ)⁺Jᵀr (zero at a stationary point; an estimate, first
+  /// order in the residuals' curvature). Infinite when that step is not finite. A warning above 1e-6.
+  double g_stopping_estimate = 0;
+  double pole_stopping_estimate = 0;
   std::vector<PoleUncertainty> poles;
   /// Standard deviation of |G_ij| and ∠G_ij (rad) at each of the data's frequencies, [k](i, j).
   std::vector<Eigen::MatrixXd> magnitude_sd, phase_sd;
