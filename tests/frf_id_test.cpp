@@ -487,7 +487,8 @@ TEST(FrfAutomatic, DefaultRStepsDownWhereTheBandMakesTwentyPowersDependent) {
   // Noise 1e-4 of |G| ≥ 0.1 in amplitude (SNR ≥ 60 dB over 300 lines): the
   // resonance lies within 1e-3 rad of 0.6 (a wrong order or a failed estimate misses it).
   double closest = M_PI;
-  for (Eigen::Index i = 0; i < res.poles.size(); ++i) closest = std::min(closest, std::abs(std::arg(res.poles(i)) - 0.6));
+  for (Eigen::Index i = 0; i < res.poles.size(); ++i)
+    closest = std::min(closest, std::abs(std::arg(res.poles(i)) - 0.6));
   EXPECT_LT(closest, 1e-3);
   // A band where r = 20 is usable: no note.
   EXPECT_TRUE(identify_frf(noise_free_frf(sys, random_grid(rng, 300, 0.0, M_PI), 1e-12)).notes.empty());
