@@ -337,8 +337,8 @@ int run(const IdentifyFrfCommand& c) {
       res.g_error_estimate = std::max(refined.g_error_estimate, refined.g_stopping_estimate);
       res.pole_error_estimate = std::max(refined.pole_error_estimate, refined.pole_stopping_estimate);
       res.rounding_moves = "the residuals and the Jacobian at the ML optimum moved by their rounding in random "
-                           "directions, one Gauss-Newton step each; and one more Gauss-Newton step from the result "
-                           "(the optimiser's stopping error), the larger";
+                           "directions, one Gauss-Newton step each; and the optimiser's stopping error (the Gauss-Newton "
+                           "direction from the result, as far as V stays within its rounding), the larger";
     }
     // No instability warning to recompute: reflection leaves no unstable pole,
     // the refinement keeps none, and refine_ml names those --allow-unstable kept.

@@ -90,9 +90,10 @@ struct RefineResult {
   /// whether the model is usable (a warning above 1e-6), not u κ, which the least determined parameter sets.
   double g_error_estimate = 0;
   double pole_error_estimate = 0;
-  /// How far short of the optimum the optimiser stopped: the same relative changes of Ĝ and the poles under
-  /// one more Gauss–Newton step from the result, −(JᵀJ)⁺Jᵀr (zero at a stationary point; an estimate, first
-  /// order in the residuals' curvature). Infinite when that step is not finite. A warning above 1e-6.
+  /// How far short of the optimum the optimiser stopped: the same relative changes of Ĝ and the poles along the
+  /// Gauss–Newton direction −(JᵀJ)⁺Jᵀr from the result (zero at a stationary point), at the largest step
+  /// 2⁻ᵏ of it (k ≤ 40) whose V stays within 1e-14 relative of the result's: an estimate along that one
+  /// direction, not a bound. Infinite when the direction is not finite. A warning above 1e-6.
   double g_stopping_estimate = 0;
   double pole_stopping_estimate = 0;
   std::vector<PoleUncertainty> poles;
