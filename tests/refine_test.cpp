@@ -477,20 +477,6 @@ TEST(RefineSpectrumMonteCarlo, WeightedRefinementIsTheGlobalOptimumAndBeatsAlgor
 namespace fdsid {
 namespace {
 
-// The refined model's rounding estimate (refine.cpp, refined_rounding_effect:
-// the optimum moved by δθ = −(JᵀJ)⁺(Jᵀδr + δJᵀr) for rounding-size δr, δJ in
-// 3 random directions) is a first-order response to residual perturbations;
-// so is a rerun of the refinement on data whose Y is perturbed by ε relative
-// (δr = ε |Y|/σ × a standard normal). Scaled by ε/γ_r (γ_r = u √(2(modes + 2))
-// = u √8, the estimate's size per unit of |Y|/σ) the estimate must lie above
-// the rerun's change, within 3 × (one draw may exceed the largest of three
-// by that factor), and not more than 100 × above it (its δr also counts the
-// modes' terms |C_i (ξ − A_i)⁻¹ B_i|, which exceed |Y| near antiresonances:
-// the factor 100 is the tightness claimed). ε = 1e-9: large enough that the
-// rerun's stopping rule (relative parameter change 1e-12) does not hide the
-// change, small enough to stay first order. Two bands over the structure of
-// two_modes(), the second (0.5–1.6 rad/s) leaving the 3 rad/s mode outside
-// and the poles 4 × less well determined. Measured: G 2.5–2.7 ×, poles 2.7–10 ×.
 // two_modes() on F = 200 lines uniform in [0.5, hi] rad/s, G with complex
 // noise of std 1e-3 per part, declared variance 2e-6 (both tests below).
 FrfData two_modes_data(std::mt19937_64& rng, double hi) {
@@ -529,6 +515,20 @@ ModelChange model_change(const StateSpace& a, const StateSpace& b, const Eigen::
   return c;
 }
 
+// The refined model's rounding estimate (refine.cpp, refined_rounding_effect:
+// the optimum moved by δθ = −(JᵀJ)⁺(Jᵀδr + δJᵀr) for rounding-size δr, δJ in
+// 3 random directions) is a first-order response to residual perturbations;
+// so is a rerun of the refinement on data whose Y is perturbed by ε relative
+// (δr = ε |Y|/σ × a standard normal). Scaled by ε/γ_r (γ_r = u √(2(modes + 2))
+// = u √8, the estimate's size per unit of |Y|/σ) the estimate must lie above
+// the rerun's change, within 3 × (one draw may exceed the largest of three
+// by that factor), and not more than 100 × above it (its δr also counts the
+// modes' terms |C_i (ξ − A_i)⁻¹ B_i|, which exceed |Y| near antiresonances:
+// the factor 100 is the tightness claimed). ε = 1e-9: large enough that the
+// rerun's stopping rule (relative parameter change 1e-12) does not hide the
+// change, small enough to stay first order. Two bands over the structure of
+// two_modes(), the second (0.5–1.6 rad/s) leaving the 3 rad/s mode outside
+// and the poles 4 × less well determined. Measured: G 2.5–2.7 ×, poles 2.7–10 ×.
 TEST(RefineRounding, EstimateBracketsTheChangeFromPerturbedData) {
   std::mt19937_64 rng(11);
   std::normal_distribution<double> n01(0, 1);

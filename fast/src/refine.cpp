@@ -694,10 +694,12 @@ RoundingEffect refined_rounding_effect(const FrfData& d, const Layout& lay, cons
 // V ≫ E V, makes JᵀJ a poor Hessian), the whole of a step that still lowers
 // the cost where the optimiser stopped short. An estimate along one
 // direction, not a bound. Pole parameters on the stability bound are held
-// there (their columns of J dropped), as minimise() holds them.
-// `J` and `r`: the cost's Jacobian and residuals at `th`.
+// there (their columns of J dropped, and J's SVD recomputed only then), as
+// minimise() holds them.
+// `J` and `r`: the cost's Jacobian and residuals at `th`; `svd`: J's, with V.
 RoundingEffect stopping_effect(const FrfData& d, const RefineOptions& opt, const Layout& lay, const RefineResult& res,
-                               const Eigen::MatrixXd& J, const Eigen::VectorXd& r, const Eigen::VectorXd& th) {
+                               const Eigen::MatrixXd& J, const Eigen::BDCSVD<Eigen::MatrixXd>& svd,
+                               const Eigen::VectorXd& r, const Eigen::VectorXd& th) {
   Eigen::MatrixXd Jf = J;
   int q = res.free_parameters;
   for (size_t i = 0; i < lay.sizes.size(); ++i)
@@ -705,8 +707,10 @@ RoundingEffect stopping_effect(const FrfData& d, const RefineOptions& opt, const
       Jf.col(lay.offset[i]).setZero();
       --q;
     }
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(Jf, Eigen::ComputeThinV);
-  const Eigen::VectorXd step = gauss_newton_step(svd, q, Jf.transpose() * r);
+  const Eigen::VectorXd step =
+      q == res.free_parameters ? gauss_newton_step(svd, q, J.transpose() * r)
+                               : gauss_newton_step(Eigen::BDCSVD<Eigen::MatrixXd>(Jf, Eigen::ComputeThinV), q,
+                                                   Jf.transpose() * r);
   RoundingEffect out(res.model, d.omega);
   if (!step.allFinite()) {
     out.fail("the Gauss-Newton step from the result is not finite");
@@ -742,11 +746,8 @@ std::string stopping_warning(const RoundingEffect& e, const std::string& termina
   if (!usable_precision(worst))
     return where + "short of the optimum: " + moves + ", so the refined model is not the maximum-likelihood "
            "optimum to any digit; " + advice.instead + " (--strict: exit 1)";
-  const int digits = static_cast<int>(std::floor(-std::log10(worst)));
   return where + "short of the optimum: " + moves + ", so the refined model is the maximum-likelihood optimum to "
-         "about " + (digits < 1 ? std::string("its order of magnitude")
-                                : std::to_string(digits) + " significant digit" + (digits == 1 ? "" : "s")) +
-         " (an estimate along that one direction); " + advice.compare;
+         "about " + significant_digits_text(worst) + " (an estimate along that one direction); " + advice.compare;
 }
 }  // namespace
 
@@ -803,9 +804,11 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
   const int q = res.free_parameters;
   res.condition = q > 0 && sv(q - 1) > 0 ? sv(0) / sv(q - 1) : std::numeric_limits<double>::infinity();
   // What the model is used for, G and the poles (u κ(J) is the parameters'):
-  const RoundingEffect rounding = refined_rounding_effect(
-      data, lay, res, opt, J_cost,
-      has_input_noise(opt) ? Eigen::BDCSVD<Eigen::MatrixXd>(J_cost, Eigen::ComputeThinV) : svd, residuals, th);
+  // the cost's Jacobian, J itself unless errors-in-variables.
+  using Svd = Eigen::BDCSVD<Eigen::MatrixXd>;
+  const Svd svd_eiv_cost = has_input_noise(opt) ? Svd(J_cost, Eigen::ComputeThinV) : Svd();
+  const Svd& svd_cost = has_input_noise(opt) ? svd_eiv_cost : svd;
+  const RoundingEffect rounding = refined_rounding_effect(data, lay, res, opt, J_cost, svd_cost, residuals, th);
   res.g_error_estimate = rounding.g;
   res.pole_error_estimate = rounding.poles;
   const PrecisionAdvice advice{
@@ -817,7 +820,7 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
           advice);
       !w.empty())
     res.warnings.push_back(w);
-  const RoundingEffect stopping = stopping_effect(data, opt, lay, res, J_cost, residuals, th);
+  const RoundingEffect stopping = stopping_effect(data, opt, lay, res, J_cost, svd_cost, residuals, th);
   res.g_stopping_estimate = stopping.g;
   res.pole_stopping_estimate = stopping.poles;
   if (const std::string w = stopping_warning(stopping, res.termination, res.iterations, advice); !w.empty())

@@ -45,6 +45,11 @@ std::string precision_warning(double estimate, const std::string& what, const st
                               PrecisionEstimate kind = PrecisionEstimate::FirstOrderBound,
                               const PrecisionAdvice& advice = {});
 
+/// The correct digits a relative error estimate in (0, 1) leaves, as the
+/// precision verdicts say them: "d significant digit(s)", d = ⌊−log10 estimate⌋,
+/// or "its order of magnitude" for d = 0.
+std::string significant_digits_text(double estimate);
+
 /// Whether an estimate with this relative error estimate has a correct digit (< 1).
 inline bool usable_precision(double estimate) { return estimate < 1.0; }
 

@@ -38,15 +38,18 @@ size_t edit_distance(const std::string& a, const std::string& b) {
 
 std::string p_text(double p, int digits) { return p < 1e-300 ? std::string("< 1e-300") : sci(p, digits); }
 
+std::string significant_digits_text(double estimate) {
+  const int digits = static_cast<int>(std::floor(-std::log10(estimate)));
+  return digits < 1 ? std::string("its order of magnitude")
+                    : std::to_string(digits) + " significant digit" + (digits == 1 ? "" : "s");
+}
+
 std::string precision_warning(double estimate, const std::string& what, const std::string& details,
                               PrecisionEstimate kind, const PrecisionAdvice& advice) {
   if (estimate <= kPrecisionWarningLevel) return "";
   if (usable_precision(estimate)) {
-    const int digits = static_cast<int>(std::floor(-std::log10(estimate)));
     return "double precision may have lost accuracy: estimated relative error of " + what + " " + fmt(estimate, 3) +
-           " (" + details + "): usable to about " +
-           (digits < 1 ? std::string("its order of magnitude")
-                       : std::to_string(digits) + " significant digit" + (digits == 1 ? "" : "s")) +
+           " (" + details + "): usable to about " + significant_digits_text(estimate) +
            (kind == PrecisionEstimate::FirstOrderBound ? " (a first-order bound; the true error is often smaller)"
                                                        : " (a statistical estimate from rounding-size perturbations)") +
            "; " + advice.compare;
