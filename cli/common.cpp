@@ -177,6 +177,20 @@ void add_strict_option(CLI::App* sub, bool& strict) {
                 "error is 1 or more: no correct digit)");
 }
 
+void add_max_iterations_option(CLI::App* sub, int& value, const std::string& refine_flag) {
+  sub->add_option("--max-iterations", value,
+                  "Levenberg-Marquardt iterations of " + refine_flag +
+                      " (default 200); raise it when the refinement stops at the iteration limit (an ill-determined "
+                      "direction, e.g. a mode outside the band, can take thousands)")
+      ->check(CLI::Range(1, 1000000));
+}
+
+void require_refinement_for_limit(int value, bool refine, const std::string& refine_flag) {
+  if (value > 0 && !refine)
+    throw Error(ErrorKind::Input, "--max-iterations", "limits " + refine_flag + "'s iterations; add " + refine_flag +
+                                                          " or drop --max-iterations");
+}
+
 ModelFile read_model_with_diagnostics(const std::string& path) {
   ModelFile f;
   f.json = read_model_file(path);

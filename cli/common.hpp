@@ -104,6 +104,13 @@ void add_frequency_unit_options(CLI::App* sub, FrequencyUnits& units);
 /// --strict: an estimate unusable in double precision (fdsid::usable_precision
 /// false) exits 1 and writes nothing (review finding 38).
 void add_strict_option(CLI::App* sub, bool& strict);
+/// --max-iterations N (1 … 10⁶) of the refinement `refine_flag` names: the
+/// Levenberg–Marquardt iteration limit; `value` stays 0 when not given. The
+/// command refuses it without its refinement (require_refinement_for_limit).
+void add_max_iterations_option(CLI::App* sub, int& value, const std::string& refine_flag);
+/// Error(Input) when --max-iterations was given (`value` > 0) but not the
+/// refinement it limits (a limit that would silently do nothing).
+void require_refinement_for_limit(int value, bool refine, const std::string& refine_flag);
 /// With --strict and an unusable estimate: one line on stderr, true (the
 /// caller returns 1 before writing anything).
 bool refused_as_unusable(bool strict, double error_estimate);

@@ -28,6 +28,7 @@ struct IdentifyFrfCommand {
   bool eiv = false, improper = false, strict = false;
   bool refine = false;          ///< --refine ml: maximum-likelihood refinement of the subspace estimate (issue 15)
   bool allow_unstable = false;  ///< keep unstable poles (else reflected into the stable region)
+  int max_iterations = 0;       ///< --max-iterations of --refine ml (0: not given, RefineOptions' default)
   RecordSelection selection;
   FrequencyUnits units;  ///< --frequency-unit, --sample-time (FRF files)
   std::vector<double> noise_std;  ///< --noise-std: known output noise (records), else the sample variance
@@ -64,6 +65,7 @@ RefineOptions refine_options(const IdentifyFrfCommand& c, const FrfData& data, c
                              const SampleStatistics* eiv_lines) {
   RefineOptions o;
   o.allow_unstable = c.allow_unstable;
+  if (c.max_iterations > 0) o.max_iterations = c.max_iterations;
   if (eiv_lines) {
     o.noise = RefineNoise::Sample;
     o.periods = source.periods;
@@ -113,6 +115,7 @@ nlohmann::json refinement_json(const RefineResult& r, const RefineOptions& o) {
             {"parameters", r.parameters},
             {"free_parameters", r.free_parameters},
             {"iterations", r.iterations},
+            {"max_iterations", o.max_iterations},
             {"termination", r.termination},
             {"g_stopping_estimate", r.g_stopping_estimate},
             {"pole_stopping_estimate", r.pole_stopping_estimate},
@@ -238,6 +241,7 @@ int run(const IdentifyFrfCommand& c) {
                 "refines G (with output or errors-in-variables noise), not the inverse model of --improper: drop one");
   if (c.refine && c.precision == Precision::High)
     throw Error(ErrorKind::Input, "--refine ml", "refines the double-precision estimate; not with --precision high");
+  require_refinement_for_limit(c.max_iterations, c.refine, "--refine ml");
   refuse_overwrite(c.plot_path, {c.frf_path, c.data_path, c.meta_path, c.json_path}, "--plot");
   refuse_overwrite(c.json_path, {c.frf_path, c.data_path, c.meta_path}, "--json");
   Out out{c.json_path == "-"};
@@ -442,6 +446,7 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
                   "ml: refine the subspace estimate by maximum likelihood (Levenberg-Marquardt, Ceres) for the data's "
                   "noise model (with --eiv: input and output noise), with Cramer-Rao uncertainties of the poles and of G")
       ->transform(choice(std::map<std::string, bool>{{"ml", true}, {"none", false}}, "is not ml or none"));
+  add_max_iterations_option(idf, c->max_iterations, "--refine ml");
   idf->add_flag("--allow-unstable", c->allow_unstable,
                 "keep unstable poles (default: reflect them into the stable region and refit B, D; a warning names "
                 "any unstable pole that remains)");

@@ -21,6 +21,7 @@ struct IdentifySpectrumCommand {
   Precision precision = Precision::Double;
   bool strict = false;
   bool refine = false;  ///< --refine: weighted NLS of the factor from Algorithm 1's estimate (issue 15)
+  int max_iterations = 0;  ///< --max-iterations of --refine (0: not given, refine_spectrum's default)
 };
 
 nlohmann::json refinement_json(const SpectrumRefineResult& r, const SpectrumResult& start) {
@@ -32,6 +33,7 @@ nlohmann::json refinement_json(const SpectrumRefineResult& r, const SpectrumResu
                       {"terms", r.terms},
                       {"parameters", r.parameters},
                       {"iterations", r.iterations},
+                      {"max_iterations", r.max_iterations},
                       {"termination", r.termination},
                       {"at_stability_bound", r.at_stability_bound},
                       {"max_zero_modulus", r.max_zero_modulus},
@@ -46,6 +48,7 @@ int run(const IdentifySpectrumCommand& c) {
   if (c.options.p < 0 || c.options.r < 0) throw Error(ErrorKind::Input, c.options.p < 0 ? "--p" : "--r", "must be positive");
   if (c.precision == Precision::High && c.refine)
     throw Error(ErrorKind::Input, "--refine", "refines the double-precision estimate; not with --precision high");
+  require_refinement_for_limit(c.max_iterations, c.refine, "--refine");
   if (c.precision == Precision::High && !c.plot_path.empty())
     throw Error(ErrorKind::Input, "--plot", "is drawn from the double-precision result; not with --precision high");
   refuse_overwrite(c.plot_path, {c.data_path, c.json_path}, "--plot");
@@ -78,7 +81,7 @@ int run(const IdentifySpectrumCommand& c) {
   }
   SpectrumRefineResult refined;
   try {
-    refined = refine_spectrum(data, res.model);
+    refined = c.max_iterations > 0 ? refine_spectrum(data, res.model, c.max_iterations) : refine_spectrum(data, res.model);
   } catch (const Error& e) {
     throw e.within(c.data_path);
   }
@@ -126,6 +129,7 @@ void register_identify_spectrum(CLI::App& app, Action& chosen) {
   ids->add_flag("--refine", c->refine,
                 "refine Algorithm 1's factor by weighted nonlinear least squares on the samples (weights 1/S_var when "
                 "the CSV has an S_var column, else unit), kept stable and minimum phase");
+  add_max_iterations_option(ids, c->max_iterations, "--refine");
   on_parsed(ids, c, chosen, run);
 }
 

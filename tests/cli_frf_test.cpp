@@ -1699,6 +1699,42 @@ TEST_F(CliFrf, RefineMlOnRecords) {
   for (const json& row : j["poles"]) EXPECT_LT(std::hypot(row[0].get<double>(), row[1].get<double>()), 1.0);
 }
 
+// --max-iterations sets the refinement's iteration limit; at the limit the
+// report names it and the fix once (the stopping estimate's warning and the
+// iteration-limit warning said the same stop twice), and the JSON records the
+// limit. Without --refine ml the option would do nothing: refused.
+TEST_F(CliFrf, MaxIterationsLimitsTheRefinementAndIsNamedAtTheLimit) {
+  simulate(128, 8, 1e-3, "rec");
+  const std::vector<std::string> base = {"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
+                                         "--order", "4", "--r", "8", "--skip-periods", "1", "--refine", "ml",
+                                         "--json", "-"};
+  std::vector<std::string> two = base;
+  two.insert(two.end(), {"--max-iterations", "2"});
+  const RunResult r = run_fdsid(two);
+  ASSERT_TRUE(Succeeded(r)) << describe(r);
+  const json j = json::parse(r.out);
+  const json& f = j["refinement"];
+  ASSERT_EQ(f["termination"], "no_convergence") << f.dump();
+  EXPECT_EQ(f["iterations"], 2);
+  EXPECT_EQ(f["max_iterations"], 2);
+  const std::string w = j["warnings"].dump();
+  EXPECT_NE(w.find("--max-iterations"), std::string::npos) << w;
+  size_t stops = 0;
+  for (const json& x : j["warnings"])
+    if (x.get<std::string>().find("the refinement stopped") != std::string::npos) ++stops;
+  EXPECT_EQ(stops, 1u) << w;
+  const RunResult full = run_fdsid(base);
+  ASSERT_TRUE(Succeeded(full));
+  EXPECT_EQ(json::parse(full.out)["refinement"]["max_iterations"], 200);
+  EXPECT_EQ(json::parse(full.out)["refinement"]["termination"], "convergence");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
+                                    "--order", "4", "--max-iterations", "500"}),
+                         {"--max-iterations", "--refine ml"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json"),
+                                    "--order", "4", "--refine", "ml", "--max-iterations", "0"}),
+                         {"--max-iterations"}));
+}
+
 // Refused before any work: the errors-in-variables ML estimator is not there;
 // --use-periods beyond what remains after the skipped periods.
 TEST_F(CliFrf, RefineAndUsePeriodsRefusals) {

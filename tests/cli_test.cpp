@@ -830,6 +830,15 @@ TEST_F(Cli, IdentifySpectrumRefine) {
   zero_var.replace(zero_var.rfind("1e-6"), 4, "0");
   EXPECT_TRUE(IsBadInput(identify(write("zero_var.csv", zero_var), {"--order", "4", "--refine"}), {"S_var", "must be positive"}));
   EXPECT_TRUE(IsBadInput(identify(data, {"--order", "4", "--refine", "--precision", "high"}), {"--refine", "--precision high"}));
+  // --max-iterations: the limit is kept and named at it; without --refine refused.
+  const RunResult one = identify(data, {"--order", "4", "--refine", "--max-iterations", "1", "--json", "-"});
+  ASSERT_TRUE(Succeeded(one)) << describe(one);
+  const json lim = json::parse(one.out).at("refinement");
+  EXPECT_EQ(lim.at("max_iterations"), 1);
+  EXPECT_EQ(lim.at("iterations"), 1);
+  EXPECT_NE(lim.at("warnings").dump().find("--max-iterations"), std::string::npos) << lim.dump(1);
+  EXPECT_EQ(ref.at("max_iterations"), 200);
+  EXPECT_TRUE(IsBadInput(identify(data, {"--order", "4", "--max-iterations", "10"}), {"--max-iterations", "--refine"}));
 
   // The 50-digit reader accepts (and ignores) the S_var column.
   const std::string g1 = write("g1.json", R"({"domain":"discrete","sample_time":1,"A":[[0.8]],"B":[[1]],"C":[[0.3]],"D":[[1]]})");

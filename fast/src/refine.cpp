@@ -432,9 +432,12 @@ Eigen::MatrixXd jacobian(const FrfData& d, const Layout& l, const Eigen::VectorX
 
 
 // Why Ceres stopped without converging: its message, except at the iteration
-// limit, where the message counts only the last of minimise()'s solves.
+// limit, where the message counts only the last of minimise()'s solves; there
+// the fix is named (the CLI's --max-iterations sets RefineOptions::max_iterations).
 std::string termination_reason(const ceres::Solver::Summary& summary) {
-  return summary.termination_type == ceres::NO_CONVERGENCE ? "the iteration limit" : summary.message;
+  return summary.termination_type == ceres::NO_CONVERGENCE
+             ? "the iteration limit; a larger --max-iterations lets it go on"
+             : summary.message;
 }
 
 /// Whether mode i's pole parameter sits on its stability bound.
@@ -733,8 +736,11 @@ RoundingEffect stopping_effect(const FrfData& d, const RefineOptions& opt, const
 // The warning for stopping_effect ("" at or below kPrecisionWarningLevel).
 std::string stopping_warning(const RoundingEffect& e, const std::string& termination, int iterations,
                              const PrecisionAdvice& advice) {
-  const std::string where = "the refinement stopped (" + termination + ", " + std::to_string(iterations) +
-                            " iterations) ";
+  const std::string where =
+      termination == "no_convergence"
+          ? "the refinement stopped at its iteration limit (" + std::to_string(iterations) +
+                " iterations; a larger --max-iterations lets it go on) "
+          : "the refinement stopped (" + termination + ", " + std::to_string(iterations) + " iterations) ";
   if (!e.failure.empty())
     return where + "where one more Gauss-Newton step is not finite: the result is not the optimum to any digit; " +
            advice.instead + " (--strict: exit 1)";
@@ -823,8 +829,8 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
   const RoundingEffect stopping = stopping_effect(data, opt, lay, res, J_cost, svd_cost, residuals, th);
   res.g_stopping_estimate = stopping.g;
   res.pole_stopping_estimate = stopping.poles;
-  if (const std::string w = stopping_warning(stopping, res.termination, res.iterations, advice); !w.empty())
-    res.warnings.push_back(w);
+  const std::string stopped_short = stopping_warning(stopping, res.termination, res.iterations, advice);
+  if (!stopped_short.empty()) res.warnings.push_back(stopped_short);
   if (opt.noise != RefineNoise::None) {
     res.covariance = Eigen::MatrixXd::Zero(lay.count, lay.count);
     for (int i = 0; i < q; ++i)
@@ -872,7 +878,8 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
     res.warnings.push_back("a pole of the refined model sits on the stability margin (the constraint is active): the data "
                            "favour an unstable or undamped pole there; the model is the best stable one, and an effect "
                            "the model lacks or another order may explain the data better");
-  if (res.termination != "convergence")
+  // At the iteration limit a stopping warning names the limit and the fix already.
+  if (res.termination != "convergence" && (res.termination != "no_convergence" || stopped_short.empty()))
     res.warnings.push_back("the refinement stopped after " + std::to_string(res.iterations) +
                            " iterations without converging (" + termination_reason(summary) + ")");
   if (opt.allow_unstable) {
@@ -1022,6 +1029,7 @@ SpectrumRefineResult refine_spectrum(const SpectrumData& data, const StateSpace&
   SpectrumCost cost(data, lay);
   const ceres::Solver::Summary summary = minimise(cost, lay, th, /*keep_stable=*/true, max_iterations);
   res.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  res.max_iterations = max_iterations;
   res.termination = termination_text(summary);
   res.terms = cost.num_residuals();
   res.parameters = lay.count;

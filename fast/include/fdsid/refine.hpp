@@ -154,6 +154,7 @@ struct SpectrumRefineResult {
   int terms = 0;               ///< real residuals: (M+1) m²
   int parameters = 0;          ///< of the modal parametrisation
   int iterations = 0;          ///< Levenberg–Marquardt iterations
+  int max_iterations = 0;      ///< the iteration limit it ran under
   std::string termination;     ///< "convergence", "no_convergence" or "stopped"
   bool at_stability_bound = false;
   double max_zero_modulus = 0; ///< largest |zero| of the refined factor (< 1)
