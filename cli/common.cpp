@@ -88,17 +88,32 @@ CLI::Validator order_value() {
       "n|auto");
 }
 
-CLI::Validator whole_count() {
+CLI::Validator count_at_least(long lo) {
   return CLI::Validator(
-      [](std::string& s) -> std::string {
+      [lo](std::string& s) -> std::string {
         char* end = nullptr;
         errno = 0;
         const long v = std::strtol(s.c_str(), &end, 10);
-        if (s.empty() || *end != '\0' || errno != 0 || v < 0 || v > std::numeric_limits<int>::max())
-          return "\"" + s + "\" is not a whole number >= 0";
+        if (s.empty() || *end != '\0' || errno != 0 || v < lo || v > std::numeric_limits<int>::max())
+          return "\"" + s + "\" is not a whole number >= " + std::to_string(lo);
         return {};
       },
-      "INT>=0");
+      "INT>=" + std::to_string(lo));
+}
+
+CLI::Validator whole_count() { return count_at_least(0); }
+
+CLI::Validator finite_number(double lo, bool lo_allowed) {
+  const std::string bound = (lo_allowed ? ">= " : "> ") + fmt(lo, 6);
+  return CLI::Validator(
+      [lo, lo_allowed, bound](std::string& s) -> std::string {
+        char* end = nullptr;
+        const double x = std::strtod(s.c_str(), &end);
+        if (s.empty() || *end != '\0' || !std::isfinite(x) || (lo_allowed ? x < lo : x <= lo))
+          return "\"" + s + "\" is not a finite number " + bound;
+        return {};
+      },
+      "FLOAT" + bound);
 }
 
 CLI::Validator output_path(const std::string& option) {

@@ -85,6 +85,13 @@ CLI::Validator order_value();
 /// CLI11's NonNegativeNumber printed the largest double, 309 digits, in its
 /// refusal (review finding 8 of stop 47).
 CLI::Validator whole_count();
+/// A whole number in [lo, 2^31 − 1] (--r: 0 there had meant "choose it"
+/// silently, a user review found).
+CLI::Validator count_at_least(long lo);
+/// A finite number above lo (or at least lo): nan, inf and out-of-range
+/// values are refused by the option's name (--omega-scale -1 and nan were
+/// silently replaced by the default, a user review found).
+CLI::Validator finite_number(double lo, bool lo_allowed);
 
 /// An output file option (--out, --json, ...): checked at parse time, before
 /// any work (fdsid::require_writable_path: folder exists and is writable, the

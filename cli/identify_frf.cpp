@@ -25,6 +25,7 @@ struct IdentifyFrfCommand {
   Precision precision = Precision::Double;
   EivVariance eiv_variance = EivVariance::Data;
   double min_input_snr = 10;
+  bool min_input_snr_given = false;  ///< --min-input-snr applies to --eiv and --improper only
   bool eiv = false, improper = false, strict = false;
   bool refine = false;          ///< --refine ml: maximum-likelihood refinement of the subspace estimate (issue 15)
   bool allow_unstable = false;  ///< keep unstable poles (else reflected into the stable region)
@@ -242,6 +243,9 @@ int run(const IdentifyFrfCommand& c) {
   if (c.refine && c.precision == Precision::High)
     throw Error(ErrorKind::Input, "--refine ml", "refines the double-precision estimate; not with --precision high");
   require_refinement_for_limit(c.max_iterations, c.refine, "--refine ml");
+  if (c.min_input_snr_given && !c.eiv && !c.improper)
+    throw Error(ErrorKind::Input, "--min-input-snr",
+                "is the line rule of --eiv and --improper (Eq. 34); add one of them or drop --min-input-snr");
   refuse_overwrite(c.plot_path, {c.frf_path, c.data_path, c.meta_path, c.json_path}, "--plot");
   refuse_overwrite(c.json_path, {c.frf_path, c.data_path, c.meta_path}, "--json");
   Out out{c.json_path == "-"};
@@ -407,8 +411,10 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
       ->transform(order_value());
   idf->add_option("--max-order", o.max_order, "largest order --order auto considers (default min(20, r p - 1))")
       ->check(CLI::Range(1, 1000));
-  idf->add_option("--r", o.r, "number of basis functions r > n_a (default: the r in [1.5 n_a, 6 n_a] that minimises the weighted fit V_SUB, Eq. 35)");
-  idf->add_option("--r-max", o.r_max, "upper end of the r search (default 6 n_a)");
+  // 0 (the defaults' "choose") is refused when given: it had silently meant "choose" (a user review).
+  idf->add_option("--r", o.r, "number of basis functions r > n_a (default: the r in [1.5 n_a, 6 n_a] that minimises the weighted fit V_SUB, Eq. 35)")
+      ->check(count_at_least(2));
+  idf->add_option("--r-max", o.r_max, "upper end of the r search (default 6 n_a)")->check(count_at_least(2));
   idf->add_option("--domain", c->domain, "discrete (omega in rad/sample, default) or continuous (rad/s)")
       ->transform(choice(std::map<std::string, Domain>{{"discrete", Domain::Discrete},
                                                        {"continuous", Domain::Continuous}},
@@ -419,7 +425,8 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
                   "frequencies tan(omega/2): for a band that covers a small arc of the unit circle)");
   idf->add_option("--omega-scale", o.omega_scale,
                   "frequency scaling of Algorithm 2 (default sqrt(w_min w_max); discrete bilinear/orthogonal: rad/sample "
-                  "in (0, pi), default 2 atan sqrt(tan(w_min/2) tan(w_max/2)))");
+                  "in (0, pi), default 2 atan sqrt(tan(w_min/2) tan(w_max/2)))")
+      ->check(finite_number(0, false));
   idf->add_option("--precision", c->precision, "double (default) or high")
       ->transform(choice(kPrecisions, "is not double or high"));
   auto* eiv = idf->add_flag("--eiv", c->eiv,
@@ -436,7 +443,10 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
   eiv->needs(data)->excludes(improper);
   eiv_variance->needs(eiv);  // review finding 49: it was ignored without --eiv
   improper->needs(data);
-  idf->add_option("--min-input-snr", c->min_input_snr, "drop lines whose input SNR is below this (default 10)");
+  idf->add_option("--min-input-snr", c->min_input_snr,
+                  "--eiv, --improper: drop lines whose input SNR is below this (default 10)")
+      ->check(finite_number(0, true))
+      ->each([c](const std::string&) { c->min_input_snr_given = true; });
   auto* noise = idf->add_option("--noise-std", c->noise_std,
                                 "records: the known std of the white output noise per sample (one value, or one per "
                                 "output); the variance then comes from it, not from the periods, so M >= 1 period "

@@ -114,8 +114,8 @@ void register_identify_spectrum(CLI::App& app, Action& chosen) {
   add_plot_option(ids, c->plot_path);
   add_strict_option(ids, c->strict);
   ids->add_option("--order", o.order, "model order n, or auto (the default: from the singular values)")->transform(order_value());
-  ids->add_option("--p", o.p, "block rows of Y (default: min(50, M), at least 2n+1)");
-  ids->add_option("--r", o.r, "block columns of Y (default: min(50, N - p), at least 2n)");
+  ids->add_option("--p", o.p, "block rows of Y (default: min(50, M), at least 2n+1)")->check(count_at_least(1));
+  ids->add_option("--r", o.r, "block columns of Y (default: min(50, N - p), at least 2n)")->check(count_at_least(1));
   ids->add_option("--method", o.method, "akcay2011 (default) or vo1997")
       ->transform(choice(std::map<std::string, Method>{{"akcay2011", Method::Akcay2011},
                                                        {"vo1997", Method::VanOverschee1997}},

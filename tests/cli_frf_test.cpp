@@ -848,6 +848,32 @@ TEST_F(CliFrf, EivVarianceNeedsEiv) {
                          {"--eiv-variance", "--eiv"}));
 }
 
+// A user review: out-of-range numbers were silently replaced by the defaults
+// (--r 0 meant "choose r", --omega-scale -1 or nan the default scale, the JSON
+// showing a value never given) and --min-input-snr without --eiv or
+// --improper was ignored; a file with named columns got a message suggesting
+// an edit of the file, not the options. Each is refused by its option.
+TEST_F(CliFrf, OutOfRangeOrIdleOptionsAreRefusedNotDefaulted) {
+  const std::string data = std::string(FDSID_SOURCE_DIR) + "/data/pintelon2002_P512_M8.csv";
+  const std::string meta = std::string(FDSID_SOURCE_DIR) + "/data/pintelon2002_P512_M8.meta.json";
+  const std::vector<std::string> base = {"identify-frf", "--data", data, "--meta", meta};
+  const auto with = [&](std::initializer_list<std::string> extra) {
+    std::vector<std::string> a = base;
+    a.insert(a.end(), extra);
+    return run_fdsid(a);
+  };
+  EXPECT_TRUE(IsBadInput(with({"--r", "0"}), {"--r", "\"0\" is not a whole number >= 2"}));
+  EXPECT_TRUE(IsBadInput(with({"--r-max", "0"}), {"--r-max"}));
+  for (const std::string bad : {"0", "-1", "nan", "inf"})
+    EXPECT_TRUE(IsBadInput(with({"--method", "orthogonal", "--omega-scale", bad}), {"--omega-scale", "finite number > 0"}))
+        << bad;
+  EXPECT_TRUE(IsBadInput(with({"--min-input-snr", "5"}), {"--min-input-snr", "--eiv", "--improper"}));
+  EXPECT_TRUE(IsBadInput(with({"--eiv", "--min-input-snr", "nan"}), {"--min-input-snr", "finite number >= 0"}));
+  const std::string named = write("named.csv", "Force,Acc\n1,2\n");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", named, "--meta", meta}),
+                         {"the header is Force,Acc", "--input NAME --output NAME"}));
+}
+
 // Review finding 9: simulate-records wrote a meta identify-frf refuses (a line
 // listed twice) and the non-causal periodic "steady state" of an unstable model.
 TEST_F(CliFrf, SimulateRecordsRefusesWhatIdentifyFrfWouldRefuse) {

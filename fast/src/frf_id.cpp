@@ -801,24 +801,30 @@ Eigen::VectorXd frf_singular_values(const FrfData& data, int r, ContinuousMethod
 
 // The warning for an unstable estimate, or "" (issue 14: identify-frf said
 // nothing). Unstable: a pole of modulus >= 1 (discrete) or real part >= 0
-// (continuous); the worst one is named. The subspace estimate interpolates
-// the data and does not enforce stability, so this is a property of the
-// result, not an error.
+// (continuous); the worst one is named first and, when there are more, all of
+// them, worst first (a user review: the Silverbox at --allow-unstable has six,
+// the warning named one). The subspace estimate interpolates the data and
+// does not enforce stability, so this is a property of the result, not an
+// error.
 std::string instability_warning(Domain domain, const Eigen::VectorXcd& poles) {
   const bool discrete = domain == Domain::Discrete;
-  Eigen::Index worst = -1;
-  double margin = 0;  // |λ| − 1 or Re λ: >= 0 is unstable
-  for (Eigen::Index i = 0; i < poles.size(); ++i) {
-    const double m = discrete ? std::abs(poles(i)) - 1 : poles(i).real();
-    if (m >= 0 && (worst < 0 || m > margin)) {
-      worst = i;
-      margin = m;
-    }
+  const auto margin = [&](Eigen::Index i) { return discrete ? std::abs(poles(i)) - 1 : poles(i).real(); };
+  std::vector<Eigen::Index> unstable;  // |λ| − 1 or Re λ >= 0
+  for (Eigen::Index i = 0; i < poles.size(); ++i)
+    if (margin(i) >= 0) unstable.push_back(i);
+  if (unstable.empty()) return "";
+  std::stable_sort(unstable.begin(), unstable.end(), [&](Eigen::Index a, Eigen::Index b) { return margin(a) > margin(b); });
+  const auto text = [&](Eigen::Index i) {
+    return pole_text(poles(i)) + (discrete ? " of modulus " + fmt(std::abs(poles(i)), 6) : std::string());
+  };
+  std::string all;
+  if (unstable.size() > 1) {
+    all = " (" + std::to_string(unstable.size()) + " unstable poles:";
+    for (size_t k = 0; k < unstable.size(); ++k) all += (k ? ", " : " ") + text(unstable[k]);
+    all += ")";
   }
-  if (worst < 0) return "";
-  const cplx z = poles(worst);
-  return "the identified model is unstable: pole " + pole_text(z) + " " +
-         (discrete ? "of modulus " + fmt(std::abs(z), 6) + " >= 1" : "with real part >= 0") +
+  return "the identified model is unstable: pole " + text(unstable[0]) +
+         (discrete ? " >= 1" : " with real part >= 0") + all +
          "; it fits the data's frequency response but must not be simulated: try another --order or --r";
 }
 

@@ -637,9 +637,16 @@ Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int
     const bool is_u = !h.empty() && h[0] == 'u', is_y = !h.empty() && h[0] == 'y';
     const std::string rest = h.empty() ? "" : h.substr(1);
     const bool index_ok = rest.empty() || rest.find_first_not_of("0123456789") == std::string::npos;
-    if (!(is_u || is_y) || !index_ok)
+    if (!(is_u || is_y) || !index_ok) {
+      // Most measured files name their columns (uEst, Force, ...): the fix is
+      // the options, not an edit of the file (a user review).
+      std::string names;
+      for (const std::string& n : header) names += (names.empty() ? "" : ",") + n;
       input_error(name + " line 1", "column " + std::to_string(c + 1) + " \"" + h +
-                                        "\" is not u, y, u<k> or y<k> (header u,y or u1,...,y1,...)");
+                                        "\" is not u, y, u<k> or y<k>; the header is " + names +
+                                        ": name the columns to use with --input NAME --output NAME (or write the "
+                                        "header u,y or u1,...,y1,...)");
+    }
     if (is_u) {
       if (outputs > 0) input_error(name + " line 1", "input columns must come before output columns");
       ++inputs;
