@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <tuple>
 #include <vector>
 
 #include <unistd.h>
@@ -217,6 +218,51 @@ ModelFile read_model_with_diagnostics(const std::string& path) {
          "its G or poles), so every number computed from it here may be too; identify it again (see the file's "
          "warnings: --precision high, a lower order or another r)";
   return f;
+}
+
+namespace {
+std::vector<std::string> source_columns(const nlohmann::json& model_json, const char* field) {
+  if (!model_json.is_object() || !model_json.contains("source") || !model_json["source"].is_object()) return {};
+  const nlohmann::json& f = model_json["source"].value(field, nlohmann::json());
+  std::vector<std::string> names;
+  if (!f.is_array()) return {};
+  for (const nlohmann::json& n : f) {
+    if (!n.is_string()) return {};
+    names.push_back(n.get<std::string>());
+  }
+  return names;
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string s;
+  for (const std::string& n : names) s += (s.empty() ? "" : " ") + n;
+  return s;
+}
+}  // namespace
+
+std::string selection_against_model(const nlohmann::json& model_json, const RecordSelection& selection,
+                                    const std::string& model_path) {
+  const std::vector<std::string> ins = source_columns(model_json, "input_columns"),
+                                 outs = source_columns(model_json, "output_columns");
+  bool differ = false;
+  for (const auto& [given, model, option] : {std::tuple{&selection.inputs, &ins, "--input"},
+                                             std::tuple{&selection.outputs, &outs, "--output"}}) {
+    if (given->empty() || model->empty() || *given == *model) continue;
+    std::vector<std::string> a = *given, b = *model;
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    if (a == b)
+      throw Error(ErrorKind::Input, std::string(option) + " " + joined(*given),
+                  "the model " + model_path + " was identified with these columns in the order " + joined(*model) +
+                      " (its \"source\"), and its rows follow it: give " + option + " " + joined(*model));
+    differ = true;
+  }
+  if (!differ) return "";
+  return "the model was identified from input(s) " + joined(ins) + " and output(s) " + joined(outs) +
+         " (its \"source\"); this record is read from " +
+         (selection.inputs.empty() ? std::string("its u column(s)") : joined(selection.inputs)) + " and " +
+         (selection.outputs.empty() ? std::string("its y column(s)") : joined(selection.outputs)) +
+         ": the scores compare the model with these quantities";
 }
 
 bool refused_as_unusable(bool strict, double error_estimate) {

@@ -131,6 +131,17 @@ struct ModelFile {
   std::string unusable;
 };
 ModelFile read_model_with_diagnostics(const std::string& path);
+/// The record's columns against those the model was identified from (its
+/// "source": input_columns, output_columns, which identify-frf writes when
+/// columns are named); validate and gap read models whose rows are outputs
+/// in that order (a user review: the F-16's three outputs given in another
+/// order were scored and labelled against the wrong rows, exit 0).
+/// Error(Input) when the names given are the model's in another order;
+/// a note when they differ otherwise (another record of the same quantities,
+/// e.g. the cascaded tanks' uVal, yVal beside uEst, yEst, is legitimate);
+/// "" when they agree or either side names none.
+std::string selection_against_model(const nlohmann::json& model_json, const RecordSelection& selection,
+                                    const std::string& model_path);
 
 // ---------------------------------------------------------------------------
 // Output

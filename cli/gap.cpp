@@ -217,8 +217,10 @@ void print_report(Out& out, const GapReport& r, int periods) {
   out << "candidates (each alone):\n";
   for (const EffectFit& f : r.candidates) {
     char buf[160];
+    // A shrink that rounds to zero prints 0.000, not -0.000 (a user review).
+    const double shrink = std::abs(f.shrink) < 5e-4 ? 0.0 : f.shrink;
     std::snprintf(buf, sizeof buf, "  %-16s gap_after %-10.4g shrink %-8.3f p %-9s", fdsid::to_string(f.effect()),
-                  f.gap_after, f.shrink, p_text(f.p_value, 2).c_str());
+                  f.gap_after, shrink, p_text(f.p_value, 2).c_str());
     out << buf;
     for (const auto& kv : fdsid::parameter_list(f.parameters)) out << " " << kv.first << "=" << parameter_text(kv.second);
     out << "\n";
@@ -259,6 +261,7 @@ int run_gap(const GapCommand& c) {
   const ModelFile file = read_model_with_diagnostics(c.model_path);
   const StateSpace& model = file.model;
   const std::string& unusable = file.unusable;
+  const std::string columns_note = selection_against_model(file.json, c.selection, c.model_path);
   const Records records = read_records(c.data_path, c.meta_path, c.selection);
   const RecordMeta& meta = records.meta;
   const int outputs = static_cast<int>(records.samples.cols()) - records.inputs;
@@ -277,6 +280,7 @@ int run_gap(const GapCommand& c) {
     } catch (const Error& e) {
       throw e.within(c.data_path);
     }
+    if (!columns_note.empty()) m.notes.push_back(columns_note);
     out << "gap before " << sci(m.gap_before) << " (mean over " << outputs << " outputs; 1 = the model is right up "
         << "to the noise), after " << sci(m.gap_after) << "; joint gap " << sci(m.gap_joint) << "\n";
     out << multi_verdict_line(m, names) << "\n";
@@ -298,6 +302,7 @@ int run_gap(const GapCommand& c) {
   } catch (const Error& e) {
     throw e.within(c.data_path);
   }
+  if (!columns_note.empty()) r.notes.push_back(columns_note);
   print_report(out, r, meta.periods);
   if (!unusable.empty()) out << "warning: " << unusable << "\n";
   if (!c.table_path.empty()) write_gap_table(c.table_path, r);

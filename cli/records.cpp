@@ -95,6 +95,7 @@ int run_validate(const ValidateCommand& c) {
   refuse_overwrite(c.json_path, {c.model_path, c.data_path, c.meta_path}, "--json");
   const ModelFile file = read_model_with_diagnostics(c.model_path);
   const StateSpace& model = file.model;
+  const std::string columns_note = selection_against_model(file.json, c.selection, c.model_path);
   const Records rec = read_records(c.data_path, c.meta_path, c.selection);
   std::vector<std::string> warnings;
   if (!file.unusable.empty()) warnings.push_back(file.unusable);
@@ -120,6 +121,7 @@ int run_validate(const ValidateCommand& c) {
   out << "the model's periodic steady-state response to the record's input against its output, both averaged over "
       << fit.periods << (fit.periods == 1 ? " period" : " periods") << ", DC left out (fit = 100 (1 - ||y - yhat|| / ||y - mean y||), as MATLAB's compare)\n";
   if (below) out << "below --min-fit " << fmt(c.min_fit, 4) << " %\n";
+  if (!columns_note.empty()) out << "note: " << columns_note << "\n";
   for (const std::string& w : warnings) out << "warning: " << w << "\n";
   emit_json(c.json_path, {{"model", c.model_path},
                           {"data", c.data_path},
@@ -128,6 +130,7 @@ int run_validate(const ValidateCommand& c) {
                           {"lines", fit.lines},
                           {"outputs", outputs},
                           {"warnings", warnings},
+                          {"notes", columns_note.empty() ? std::vector<std::string>{} : std::vector{columns_note}},
                           {"pass", !below}});
   return below ? 1 : 0;
 }

@@ -874,6 +874,45 @@ TEST_F(CliFrf, OutOfRangeOrIdleOptionsAreRefusedNotDefaulted) {
                          {"the header is Force,Acc", "--input NAME --output NAME"}));
 }
 
+// A user review: validate and gap scored the F-16's three outputs given in
+// another order against the wrong rows of the model, each labelled with the
+// wrong name (exit 0). The model's "source" names its columns; the same names
+// in another order are refused, other names noted (another record of the
+// same quantities is legitimate, so it is no error), the same ones silent.
+TEST_F(CliFrf, ValidateAndGapCompareTheColumnsWithTheModelsSource) {
+  simulate(128, 8, 1e-3, "rec");
+  // Named columns: Volt, Force (another signal), Acc and Acc2 (a second sensor: Acc halved).
+  std::ifstream in(path("rec.csv"));
+  std::string line, text = "Volt,Force,Acc,Acc2\n";
+  std::getline(in, line);  // u,y
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    const size_t comma = line.find(',');
+    const double u = std::stod(line.substr(0, comma)), y = std::stod(line.substr(comma + 1));
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g,%.17g\n", u, 2 * u + 0.1, y, 0.5 * y);
+    text += buf;
+  }
+  const std::string d = write("named.csv", text), m = path("rec.meta.json");
+  ASSERT_TRUE(Succeeded(run_fdsid({"identify-frf", "--data", d, "--meta", m, "--input", "Volt", "--output", "Acc",
+                                   "Acc2", "--order", "4", "--r", "8", "--json", path("two.json")})));
+  for (const std::string cmd : {"validate", "gap"}) {
+    const RunResult swapped = run_fdsid({cmd, "--model", path("two.json"), "--data", d, "--meta", m, "--input", "Volt",
+                                         "--output", "Acc2", "Acc"});
+    EXPECT_TRUE(IsBadInput(swapped, {"--output Acc2 Acc", "in the order Acc Acc2", "give --output Acc Acc2"})) << cmd;
+    const RunResult same = run_fdsid({cmd, "--model", path("two.json"), "--data", d, "--meta", m, "--input", "Volt",
+                                      "--output", "Acc", "Acc2", "--json", "-"});
+    ASSERT_EQ(same.status, 0) << cmd << describe(same);
+    EXPECT_EQ(same.out.find("identified from input"), std::string::npos) << cmd;
+    const RunResult other = run_fdsid({cmd, "--model", path("two.json"), "--data", d, "--meta", m, "--input", "Force",
+                                       "--output", "Acc", "Acc2", "--json", "-"});
+    ASSERT_TRUE(other.status == 0 || other.status == 1) << cmd << describe(other);
+    EXPECT_NE(json::parse(other.out)["notes"].dump().find("identified from input(s) Volt and output(s) Acc Acc2"),
+              std::string::npos)
+        << cmd << other.out;
+  }
+}
+
 // Review finding 9: simulate-records wrote a meta identify-frf refuses (a line
 // listed twice) and the non-causal periodic "steady state" of an unstable model.
 TEST_F(CliFrf, SimulateRecordsRefusesWhatIdentifyFrfWouldRefuse) {
