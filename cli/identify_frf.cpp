@@ -165,7 +165,7 @@ void print_refinement(Out& out, const RefineResult& r, const RefineOptions& o, D
       << sci(r.cost)
       << " in " << r.iterations << " iterations";
   if (noise != RefineNoise::None)
-    out << "; expected " << fmt(r.expected_cost, 5) << " under a right model, p = " << sci(r.p_value, 2);
+    out << "; expected " << fmt(r.expected_cost, 5) << " under a right model, p " << p_relation(r.p_value, 2);
   out << "\n";
   const std::string unit = domain == Domain::Continuous || sample_time != 1.0 ? "rad/s" : "rad/sample";
   for (const PoleUncertainty& p : r.poles) {

@@ -871,7 +871,7 @@ RefineResult refine_ml(const FrfData& data, const StateSpace& given, const Refin
   // level) makes it too small, by about √(V / E V) if the misfit were noise-like.
   if (opt.noise != RefineNoise::None && res.expected_cost > 0 && res.p_value <= 1e-3)
     res.warnings.push_back("the Cramer-Rao uncertainties assume a right model, and V is " +
-                           fmt(res.cost / res.expected_cost, 3) + " times its expected value (p = " + sci(res.p_value, 2) +
+                           fmt(res.cost / res.expected_cost, 3) + " times its expected value (p " + p_relation(res.p_value, 2) +
                            "): they understate the model's uncertainty (by about a factor " +
                            fmt(std::sqrt(res.cost / res.expected_cost), 2) + " if the misfit were noise-like)");
   if (res.at_stability_bound)

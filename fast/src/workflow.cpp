@@ -226,13 +226,13 @@ std::string FitVerdict::summary() const {
   return "V_SUB = " + sci(v_sub) + " = " + fmt(ratio, 4) + " x its expected value " + fmt(expected, 5) +
          " under a right model and noise model (" + std::to_string(terms) + " terms, " +
          (periods > 0 ? "sample variances over M = " + std::to_string(periods) + " periods" : std::string("known variances")) +
-         "); z = " + fmt(z, 3) + ", p = " + sci(p_bound, 2) + " (Fisher's combination of the terms)";
+         "); z = " + fmt(z, 3) + ", p " + p_relation(p_bound, 2) + " (Fisher's combination of the terms)";
 }
 
 std::string FitVerdict::warning() const {
   if (!misfit) return "";
   return "the model does not explain the data to the noise level (V_SUB is " + fmt(ratio, 3) +
-         " times its expected value, p = " + sci(p_bound, 2) +
+         " times its expected value, p " + p_relation(p_bound, 2) +
          "): a higher order, " +
          (refined ? std::string() : "--refine ml (a subspace estimate need not be the best fit at its order), ") +
          "a better noise model, or an effect the model lacks (fdsid gap) may explain the rest";

@@ -19,6 +19,9 @@ std::string sci(double x, int digits = 3);
 /// A p-value as sci(p, digits), or "< 1e-300" below the smallest normal
 /// double (it underflowed; review finding 21: not 0).
 std::string p_text(double p, int digits = 3);
+/// "= " + p_text(p) for a normal p, else "< 1e-300": after "p " in a sentence
+/// ("p = 7.42e-02", "p < 1e-300"; a user review: "p = 0.00e+00" was printed).
+std::string p_relation(double p, int digits = 3);
 
 /// Relative error estimates at or below this say nothing: six or more correct
 /// digits, more than the summaries print.

@@ -38,6 +38,8 @@ size_t edit_distance(const std::string& a, const std::string& b) {
 
 std::string p_text(double p, int digits) { return p < 1e-300 ? std::string("< 1e-300") : sci(p, digits); }
 
+std::string p_relation(double p, int digits) { return p < 1e-300 ? p_text(p, digits) : "= " + p_text(p, digits); }
+
 std::string significant_digits_text(double estimate) {
   const int digits = static_cast<int>(std::floor(-std::log10(estimate)));
   return digits < 1 ? std::string("its order of magnitude")
