@@ -44,14 +44,25 @@ int run_frf(const FrfCommand& c) {
   out << "wrote " << c.out_path << ": G = Y/U and G_var at " << frf.frequencies() << " excited lines from M = "
       << rec.meta.periods << " periods (omega in " << (c.domain == Domain::Discrete ? "rad/sample" : "rad/s")
       << "; identify-frf --frf " << c.out_path
-      << (c.domain == Domain::Continuous ? " --domain continuous" : "") << ")\n";
+      << (c.domain == Domain::Continuous ? " --domain continuous" : "")
+      << (rec.meta.periods >= 4 ? " --frf-periods " + std::to_string(rec.meta.periods) : std::string()) << ")\n";
+  // G_var is a sample variance over the periods (identify-frf --frf-periods
+  // says so); below 4 periods its law has no finite variance (the F(2, 2M − 2)
+  // terms), and identify-frf from records refuses such M.
+  if (rec.meta.periods < 4)
+    out << "warning: G_var is a sample variance over only M = " << rec.meta.periods
+        << " periods: identify-frf --frf reads it as a known variance and judges the fit by that law, which is far "
+           "off at this M (identify-frf needs M >= 4 for the sample law: use more periods)\n";
   emit_json(c.json_path, {{"data", c.data_path},
                           {"meta", c.meta_path},
                           {"out", c.out_path},
                           {"domain", to_string(c.domain)},
                           {"frequencies", frf.frequencies()},
                           {"periods", rec.meta.periods},
-                          {"variance", "first-order E|dG|^2 of Y/U from the sample (co)variances over the periods / M"}});
+                          {"variance", "first-order E|dG|^2 of Y/U from the sample (co)variances over the periods / M"},
+                          {"identify", "identify-frf --frf " + c.out_path +
+                                           (rec.meta.periods >= 4 ? " --frf-periods " + std::to_string(rec.meta.periods)
+                                                                  : std::string())}});
   return 0;
 }
 

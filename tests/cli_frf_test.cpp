@@ -913,6 +913,49 @@ TEST_F(CliFrf, ValidateAndGapCompareTheColumnsWithTheModelsSource) {
   }
 }
 
+// A user review: fdsid frf writes G_var as the sample variance over the M
+// periods, and identify-frf --frf judged it as a known variance, so the true
+// order's model was flagged as a misfit (p 3.6e-4) where the records gave p
+// 0.074. --frf-periods M declares it: the fit verdict (expected value, law,
+// p) is then the records' own, to the digit (the same numbers enter both);
+// frf names the option in its summary and warns below M = 4.
+TEST_F(CliFrf, AnFrfFromRecordsIsJudgedByTheSampleVarianceLawWithFrfPeriods) {
+  simulate(128, 8, 1e-2, "rec");
+  const std::string d = path("rec.csv"), m = path("rec.meta.json");
+  const RunResult frf = run_fdsid({"frf", "--data", d, "--meta", m, "--out", path("g.csv")});
+  ASSERT_TRUE(Succeeded(frf)) << describe(frf);
+  EXPECT_NE(frf.out.find("identify-frf --frf " + path("g.csv") + " --frf-periods 8"), std::string::npos) << frf.out;
+  const std::vector<std::string> ids = {"--order", "4", "--r", "8", "--json", "-"};
+  std::vector<std::string> from_records = {"identify-frf", "--data", d, "--meta", m};
+  from_records.insert(from_records.end(), ids.begin(), ids.end());
+  std::vector<std::string> from_frf = {"identify-frf", "--frf", path("g.csv"), "--frf-periods", "8"};
+  from_frf.insert(from_frf.end(), ids.begin(), ids.end());
+  std::vector<std::string> known = {"identify-frf", "--frf", path("g.csv")};
+  known.insert(known.end(), ids.begin(), ids.end());
+  const RunResult a = run_fdsid(from_records), b = run_fdsid(from_frf), k = run_fdsid(known);
+  ASSERT_TRUE(Succeeded(a) && Succeeded(b) && Succeeded(k)) << describe(b);
+  const json fa = json::parse(a.out)["fit"], fb = json::parse(b.out)["fit"], fk = json::parse(k.out)["fit"];
+  EXPECT_EQ(fb["periods"], 8) << fb.dump();
+  // The same model from the same numbers: V_SUB and its law agree to rounding.
+  EXPECT_NEAR(fb["v_sub"].get<double>(), fa["v_sub"].get<double>(), 1e-9 * fa["v_sub"].get<double>());
+  EXPECT_DOUBLE_EQ(fb["expected"].get<double>(), fa["expected"].get<double>());
+  EXPECT_NEAR(fb["p_bound"].get<double>(), fa["p_bound"].get<double>(), 1e-6 * fa["p_bound"].get<double>() + 1e-300);
+  EXPECT_EQ(fk["periods"], 0) << fk.dump();  // without it: known variances, expected = T
+  EXPECT_EQ(json::parse(b.out)["source"]["periods"], 8);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", path("g.csv"), "--frf-periods", "3"}), {"--frf-periods"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", d, "--meta", m, "--frf-periods", "8"}), {"--frf-periods"}));
+  std::ifstream in(path("g.csv"));
+  std::string line, plain;
+  while (std::getline(in, line)) plain += line.substr(0, line.rfind(',')) + "\n";  // G_var dropped
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", write("plain.csv", plain), "--frf-periods", "8"}),
+                         {"--frf-periods", "has none"}));
+  const RunResult short_frf =
+      run_fdsid({"frf", "--data", d, "--meta", m, "--skip-periods", "6", "--out", path("g2.csv")});
+  ASSERT_TRUE(Succeeded(short_frf)) << describe(short_frf);
+  EXPECT_NE(short_frf.out.find("warning: G_var is a sample variance over only M = 2 periods"), std::string::npos)
+      << short_frf.out;
+}
+
 // Review finding 9: simulate-records wrote a meta identify-frf refuses (a line
 // listed twice) and the non-causal periodic "steady state" of an unstable model.
 TEST_F(CliFrf, SimulateRecordsRefusesWhatIdentifyFrfWouldRefuse) {

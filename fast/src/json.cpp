@@ -25,7 +25,11 @@ json to_json(const SpectrumResult& result, const std::string& data_path) {
 json to_json(const FrfSource& s) {
   json j;
   if (!s.frf_path.empty()) {
-    j = {{"frf", s.frf_path}, {"variance", s.known_variance ? "G_var column (known)" : "none (unit weights)"}};
+    j = {{"frf", s.frf_path},
+         {"variance", !s.known_variance ? "none (unit weights)"
+                      : s.periods > 0   ? "G_var column, a sample variance over the periods (--frf-periods)"
+                                        : "G_var column (known)"}};
+    if (s.periods > 0) j["periods"] = s.periods;
     if (s.units.hz || s.units.unit_given) j["frequency_unit"] = s.units.hz ? "hz" : "rad";
     if (s.units.sample_time > 0) j["sample_time"] = s.units.sample_time_text;
     return j;

@@ -191,7 +191,7 @@ FitVerdict fit_verdict(const FrfResult& result, const FrfData& data, const FrfSo
   f.available = data.has_noise_model;
   if (!f.available) return f;
   f.terms = data.frequencies() * data.outputs() * data.columns();
-  f.periods = source.frf_path.empty() && source.noise_std.empty() ? source.periods : 0;
+  f.periods = source.noise_std.empty() ? source.periods : 0;  // an FRF file's: --frf-periods
   double mean = 1, var = 1;  // Exp(1): known variance
   if (f.periods >= 4) {
     const double d = 2.0 * f.periods - 2;

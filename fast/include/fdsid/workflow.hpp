@@ -48,7 +48,7 @@ struct FrfSource {
   bool known_variance = false;       ///< the FRF CSV had a G_var column
   FrequencyUnits units;              ///< how its omega column was read (written when not the default)
   std::string data_path, meta_path;  ///< periodic records + meta, or empty
-  int periods = 0;                   ///< M of the records
+  int periods = 0;                   ///< M of the records; of an FRF file's sample variances (--frf-periods), else 0
   RecordTreatment treatment = RecordTreatment::Plain;
   EivVariance eiv_variance = EivVariance::Data;
   double min_input_snr = 10;         ///< the line rule of Eq. (34) (ErrorsInVariables, Improper)
