@@ -791,6 +791,27 @@ TEST_F(Cli, CheckRefusesBadCandidates) {
 }
 
 // ---------------------------------------------------------------------------
+// A user review: the bundled spectrum with one sample's S_re made negative
+// (a sign error at file line 11) failed in step 8 naming only the fitted
+// spectrum's minimum, at omega = 2.9, where nothing is wrong. The failure now
+// also names the data's own negative diagonal samples and the first one's
+// file line (the bundled noisy data have one already, k = 922's; noise may
+// dip below zero where the spectrum is small, so they are named, not refused).
+TEST_F(Cli, Step8NamesTheDatasOwnNegativeSamples) {
+  std::ifstream in(std::string(FDSID_SOURCE_DIR) + "/data/akcay2011_M1000_eps1e-3.csv");
+  std::string line, text;
+  for (int n = 1; std::getline(in, line); ++n) {
+    if (n == 11) line = line.substr(0, line.find(',')) + ",-0.001" + line.substr(line.find(',', line.find(',') + 1));
+    text += line + "\n";
+  }
+  const RunResult r = identify(write("negative.csv", text));
+  ASSERT_EQ(r.status, 2) << describe(r);
+  EXPECT_NE(r.err.find("step 8"), std::string::npos) << describe(r);
+  EXPECT_NE(r.err.find("negative at 2 of 1001 frequencies, the first at omega = 0.0282743 rad/sample (k = 10, file line 11)"),
+            std::string::npos)
+      << describe(r);
+}
+
 // identify-spectrum --refine and reproduce table2 --refine (issue 15, item 2)
 
 // The bundled noisy spectrum (Section 4's setting, M = 1000): the refined

@@ -748,6 +748,26 @@ double step8_fitted_spectrum_minimum(const StableRealization& sr, const Eigen::V
   return worst;
 }
 
+// For step 8's positivity failure: the data's own diagonal samples with a
+// negative real part, or "" (a user review: one negative sample, a sign error
+// at file line 11, was reported as the fitted spectrum's minimum at
+// ω = 2.9, where nothing is wrong). Noisy estimates may dip below zero where
+// the spectrum is small, so they are named, not refused.
+std::string negative_samples_note(const SpectrumData& data) {
+  int count = 0, first = -1;
+  for (int k = 0; k <= data.M; ++k)
+    for (int a = 0; a < data.m; ++a)
+      if (data.at(a, a, k).real() < 0) {
+        if (count++ == 0) first = k;
+        break;
+      }
+  if (count == 0) return "";
+  return "; the data's own diagonal samples (S_aa real part) are negative at " + std::to_string(count) + " of " +
+         std::to_string(data.M + 1) + " frequencies, the first at omega = " + fmt(M_PI * first / data.M, 6) +
+         " rad/sample (k = " + std::to_string(first + 1) + ", file line " + std::to_string(first + 2) +
+         "): a power spectrum is >= 0 there, so check those samples' sign (or the noise level)";
+}
+
 // What step 9 adds to the summands: the Riccati solution and its report.
 struct RiccatiStep {
   std::string method;
@@ -925,7 +945,11 @@ SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions
   const StableRealization sr = step7_A_C(split, U2n, d.m, n);
 
   const Eigen::VectorXd theta = step8_least_squares_EF(data, sr, res.summands);
-  res.min_spectrum = step8_fitted_spectrum_minimum(sr, theta, d.m, d.M);
+  try {
+    res.min_spectrum = step8_fitted_spectrum_minimum(sr, theta, d.m, d.M);
+  } catch (const Error& e) {
+    throw Error(e.kind(), e.where(), e.message() + negative_samples_note(data));
+  }
 
   const RiccatiStep ric = step9_riccati_B_D(res.summands, res.model);
   res.riccati_method = ric.method;
