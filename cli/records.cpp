@@ -41,11 +41,13 @@ int run_frf(const FrfCommand& c) {
   }
   write_text_file(c.out_path, frf_csv(frf));
   Out out{c.json_path == "-"};
+  // The command that identifies from the file (summary and JSON "identify").
+  const std::string identify =
+      "identify-frf --frf " + c.out_path + (c.domain == Domain::Continuous ? " --domain continuous" : "") +
+      (rec.meta.periods >= 4 ? " --frf-periods " + std::to_string(rec.meta.periods) : std::string());
   out << "wrote " << c.out_path << ": G = Y/U and G_var at " << frf.frequencies() << " excited lines from M = "
       << rec.meta.periods << " periods (omega in " << (c.domain == Domain::Discrete ? "rad/sample" : "rad/s")
-      << "; identify-frf --frf " << c.out_path
-      << (c.domain == Domain::Continuous ? " --domain continuous" : "")
-      << (rec.meta.periods >= 4 ? " --frf-periods " + std::to_string(rec.meta.periods) : std::string()) << ")\n";
+      << "; " << identify << ")\n";
   // G_var is a sample variance over the periods (identify-frf --frf-periods
   // says so); below 4 periods its law has no finite variance (the F(2, 2M − 2)
   // terms), and identify-frf from records refuses such M.
@@ -60,9 +62,7 @@ int run_frf(const FrfCommand& c) {
                           {"frequencies", frf.frequencies()},
                           {"periods", rec.meta.periods},
                           {"variance", "first-order E|dG|^2 of Y/U from the sample (co)variances over the periods / M"},
-                          {"identify", "identify-frf --frf " + c.out_path +
-                                           (rec.meta.periods >= 4 ? " --frf-periods " + std::to_string(rec.meta.periods)
-                                                                  : std::string())}});
+                          {"identify", identify}});
   return 0;
 }
 

@@ -871,7 +871,7 @@ TEST_F(CliFrf, OutOfRangeOrIdleOptionsAreRefusedNotDefaulted) {
   EXPECT_TRUE(IsBadInput(with({"--eiv", "--min-input-snr", "nan"}), {"--min-input-snr", "finite number >= 0"}));
   const std::string named = write("named.csv", "Force,Acc\n1,2\n");
   EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", named, "--meta", meta}),
-                         {"the header is Force,Acc", "--input NAME --output NAME"}));
+                         {"the header is Force, Acc", "--input NAME --output NAME"}));
 }
 
 // A user review: validate and gap scored the F-16's three outputs given in

@@ -627,6 +627,16 @@ FrfData read_frf_csv(const std::string& path, Domain domain) {
   return read_frf_csv(path, domain, rad);
 }
 
+namespace {
+// A header's non-empty names, for messages: "uEst, uVal, yEst, yVal, Ts".
+std::string header_names(const std::vector<std::string>& header) {
+  std::string names;
+  for (const std::string& h : header)
+    if (!h.empty()) names += (names.empty() ? "" : ", ") + h;
+  return names;
+}
+}  // namespace
+
 Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int& inputs) {
   const CsvHeader csv = read_csv_header(in, name, "u,y or u1,...,y1,...");
   const auto& header = csv.cells;
@@ -640,10 +650,8 @@ Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int
     if (!(is_u || is_y) || !index_ok) {
       // Most measured files name their columns (uEst, Force, ...): the fix is
       // the options, not an edit of the file (a user review).
-      std::string names;
-      for (const std::string& n : header) names += (names.empty() ? "" : ",") + n;
       input_error(name + " line 1", "column " + std::to_string(c + 1) + " \"" + h +
-                                        "\" is not u, y, u<k> or y<k>; the header is " + names +
+                                        "\" is not u, y, u<k> or y<k>; the header is " + header_names(header) +
                                         ": name the columns to use with --input NAME --output NAME (or write the "
                                         "header u,y or u1,...,y1,...)");
     }
@@ -677,12 +685,9 @@ Eigen::MatrixXd parse_records_csv(std::istream& in, const std::string& name, int
   std::vector<size_t> chosen;
   auto find = [&](const std::string& want, const char* option) {
     const auto at = std::find(header.begin(), header.end(), want);
-    if (at == header.end()) {
-      std::string names;
-      for (const auto& h : header)
-        if (!h.empty()) names += (names.empty() ? "" : ", ") + h;
-      input_error(name + " line 1", std::string(option) + " \"" + want + "\" is not a column of the header (" + names + ")");
-    }
+    if (at == header.end())
+      input_error(name + " line 1",
+                  std::string(option) + " \"" + want + "\" is not a column of the header (" + header_names(header) + ")");
     const size_t c = static_cast<size_t>(at - header.begin());
     if (std::find(chosen.begin(), chosen.end(), c) != chosen.end())
       input_error(option, "column \"" + want + "\" is chosen twice");
