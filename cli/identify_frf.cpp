@@ -262,6 +262,7 @@ int run(const IdentifyFrfCommand& c) {
   FrfSource source;
   SampleStatistics stats;
   FrfData data;
+  std::vector<std::string> noise_warnings;  // --noise-std against the periods' scatter
   if (from_frf) {
     data = read_frf_csv(c.frf_path, c.domain, c.units);
     source.frf_path = c.frf_path;
@@ -280,7 +281,7 @@ int run(const IdentifyFrfCommand& c) {
         stats = record_statistics(rec.samples, rec.inputs, meta, c.domain);
         data = stats.data;
       } else {
-        data = record_known_noise(rec.samples, rec.inputs, meta, c.domain, c.noise_std);
+        data = record_known_noise(rec.samples, rec.inputs, meta, c.domain, c.noise_std, &noise_warnings);
       }
     } catch (const Error& e) {
       throw e.within(c.data_path + " with " + c.meta_path);
@@ -312,6 +313,7 @@ int run(const IdentifyFrfCommand& c) {
   } catch (const Error& e) {
     throw e.within(where);
   }
+  res.warnings.insert(res.warnings.begin(), noise_warnings.begin(), noise_warnings.end());
   // Stable models (issue 15): unstable subspace poles are reflected, and the
   // refinement keeps them stable, unless --allow-unstable.
   // --eiv: the refinement fits G to (Û, Ŷ) of the lines kept, not to their ratio.
@@ -370,7 +372,7 @@ int run(const IdentifyFrfCommand& c) {
       << " by "
       << method << " from F = " << data.frequencies() << " frequencies"
       << (source.periods > 0 ? ", M = " + std::to_string(source.periods) + " periods" : std::string())
-      << ", r = " << res.r << (o.r == 0 ? " (minimising V_SUB)" : "") << "\n";
+      << ", r = " << res.r << (o.r > 0 ? "" : res.r_unusable_least_v_sub > 0 ? " (least V_SUB of the r with a usable estimate)" : " (minimising V_SUB)") << "\n";
   print_poles(out, res.poles);
   for (const std::string& n : res.notes) out << "note: " << n << "\n";
   if (!stabilised.empty()) out << "note: " << stabilised << "\n";

@@ -1742,6 +1742,50 @@ TEST_F(CliFrf, AKnownNoiseLevelIdentifiesFromOnePeriod) {
                          {"known noise level"}));
 }
 
+// --noise-std against the periods' scatter (record_known_noise: the
+// χ²(2 F (M − 1)) law of the deviations from the period mean, two-sided 99.9 %
+// interval). The std the record was simulated with: no warning (a false alarm
+// has probability 1e-3 at this fixed seed's draw); a variance given for the
+// std (1e-8 for 1e-4) or a std 2x too large: a warning naming the std the
+// scatter implies, ~1e-4 (within its sampling spread: ν = 2 · 32 · 3 = 192
+// degrees of freedom give the variance ±10 % at 1 sd, the std ±5 %; 3 sd:
+// 0.85e-4 ... 1.15e-4, checked to the 2 digits printed).
+TEST_F(CliFrf, AKnownNoiseLevelIsComparedWithThePeriodsScatter) {
+  const int P = 128, M = 4;
+  simulate(P, M, 1e-4, "four");
+  const auto run = [&](const char* std) {
+    return run_fdsid({"identify-frf", "--data", path("four.csv"), "--meta", path("four.meta.json"), "--order", "4",
+                      "--r", "8", "--noise-std", std, "--json", "-"});
+  };
+  const auto disagreement = [](const RunResult& r) {
+    const json j = json::parse(r.out);
+    for (const auto& w : j["warnings"])
+      if (w.get<std::string>().rfind("--noise-std", 0) == 0) return w.get<std::string>();
+    return std::string();
+  };
+  const RunResult right = run("1e-4");
+  ASSERT_TRUE(Succeeded(right));
+  EXPECT_EQ(disagreement(right), "");
+  for (const char* wrong : {"1e-8", "2e-4"}) {
+    const RunResult r = run(wrong);
+    ASSERT_TRUE(Succeeded(r));
+    const std::string w = disagreement(r);
+    ASSERT_NE(w, "") << wrong << ": " << r.out;
+    EXPECT_NE(w.find("over the 4 periods"), std::string::npos) << w;
+    const size_t at = w.find("a noise std of ");
+    ASSERT_NE(at, std::string::npos) << w;
+    const double implied = std::stod(w.substr(at + 15));
+    EXPECT_GT(implied, 0.85e-4) << w;
+    EXPECT_LT(implied, 1.15e-4) << w;
+  }
+  // One period has no scatter to compare: nothing said.
+  simulate(P, 1, 1e-4, "single");
+  const RunResult one = run_fdsid({"identify-frf", "--data", path("single.csv"), "--meta", path("single.meta.json"),
+                                   "--order", "4", "--r", "8", "--noise-std", "1e-8", "--json", "-"});
+  ASSERT_TRUE(Succeeded(one));
+  EXPECT_EQ(disagreement(one), "");
+}
+
 // Review finding 29: a resonance outside the excited band. simulate-records
 // names the model's (the Eq. 36 plant resonates at 2.38 rad/sample, damping
 // 0.069 rad/sample; the default lines stop below P/4, at 1.55 rad/sample);

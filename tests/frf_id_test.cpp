@@ -14,6 +14,7 @@
 
 #include "linalg.hpp"
 #include "fdsid/error.hpp"
+#include "fdsid/format.hpp"
 #include "fdsid/frf_id.hpp"
 #include "fdsid/paper.hpp"
 #include "fdsid/simulate.hpp"
@@ -576,6 +577,78 @@ TEST(FrfAutomatic, RSelectionScansTheSectionFiveIntervalAndTakesTheMinimum) {
   std::cout << "  [measured] V_SUB = " << res.v_sub << " at r = " << res.r << " (bound " << 300 + 5 * std::sqrt(300.0)
             << ")\n";
   EXPECT_LT(res.v_sub, 300 + 5 * std::sqrt(300.0));
+}
+
+// An r whose estimate rounding decides (a user review: the F-16 FRF at order
+// 10 chose r = 49, unusable, over a usable r = 44 with V_SUB 0.9 % higher) is
+// not taken: the search takes the least V_SUB among the usable estimates.
+// Six lightly damped modes (ζ = 0.01, 22 ... 57.6 rad/s, an F-16-like
+// structure) on 267 lines of 2-15 Hz at SNR 40 dB: at the top of the r range
+// (r = 6 n = 72) C_Y is so ill-conditioned that rounding-size moves make
+// step 1c fail, and V_SUB is often least there.
+TEST(FrfAutomatic, RSelectionPassesOverAnROfLeastVSubWhoseEstimateIsUnusable) {
+  const std::vector<double> wn = {22.0, 25.0, 32.7, 41.6, 46.2, 57.6};
+  const double zeta = 0.01;
+  StateSpace sys;
+  sys.domain = Domain::Continuous;
+  sys.A = Eigen::MatrixXd::Zero(12, 12);
+  sys.B.resize(12, 1);
+  sys.C.resize(1, 12);
+  for (size_t i = 0; i < wn.size(); ++i) {
+    const double re = -zeta * wn[i], im = wn[i] * std::sqrt(1 - zeta * zeta);
+    sys.A.block(2 * i, 2 * i, 2, 2) << re, im, -im, re;
+    sys.B.block(2 * i, 0, 2, 1) << 1.0, 0.3 * static_cast<double>(i + 1);
+    sys.C.block(0, 2 * i, 1, 2) << 1.0, -0.5;
+  }
+  sys.D = Eigen::MatrixXd::Constant(1, 1, 0.1);
+  const int F = 267;
+  const Eigen::VectorXd w = Eigen::VectorXd::LinSpaced(F, 2 * M_PI * 2.0, 2 * M_PI * 15.0);
+  double power = 0;
+  for (int k = 0; k < F; ++k) power += std::norm(frequency_response(sys, w(k))(0, 0)) / F;
+  const double var = 1e-4 * power;
+  FrfOptions o;
+  o.order = 12;
+  int passed_over = 0;
+  for (unsigned seed = 0; seed < 6; ++seed) {
+    std::mt19937_64 rng(seed);
+    std::vector<Eigen::MatrixXcd> G;
+    std::vector<Eigen::MatrixXd> V;
+    for (int k = 0; k < F; ++k) {
+      G.push_back(frequency_response(sys, w(k)) + Eigen::MatrixXcd::Constant(1, 1, complex_normal(rng, var)));
+      V.push_back(Eigen::MatrixXd::Constant(1, 1, var));
+    }
+    const FrfData d = frf_data(Domain::Continuous, w, G, V);
+    const FrfResult res = identify_frf(d, o);
+    SCOPED_TRACE("seed " + std::to_string(seed) + ", r = " + std::to_string(res.r));
+    EXPECT_TRUE(usable_precision(res.usability_estimate())) << res.usability_estimate();
+    // Every r of smaller V_SUB gives an unusable estimate (or none).
+    double least = res.v_sub;
+    for (const auto& [r, v] : res.r_scan) {
+      least = std::min(least, v);
+      if (!(v < res.v_sub)) continue;
+      try {
+        const FrfResult other = identify_frf_fixed(d, 12, r, o.continuous, o.omega_scale, o.discrete, true);
+        EXPECT_FALSE(usable_precision(other.usability_estimate())) << "r = " << r << ", V_SUB " << v;
+      } catch (const Error&) {
+      }
+    }
+    if (res.r_unusable_least_v_sub == 0) {
+      EXPECT_EQ(res.v_sub, least);
+      continue;
+    }
+    ++passed_over;
+    const auto at = std::find_if(res.r_scan.begin(), res.r_scan.end(),
+                                 [&](const auto& e) { return e.first == res.r_unusable_least_v_sub; });
+    ASSERT_NE(at, res.r_scan.end());
+    EXPECT_EQ(at->second, least);
+    EXPECT_NE(::testing::PrintToString(res.notes).find("r = " + std::to_string(res.r) + " chosen, the least V_SUB"),
+              std::string::npos)
+        << ::testing::PrintToString(res.notes);
+  }
+  // The case the test is for occurs (3 of these 6 seeds when written; the
+  // loop's checks hold whichever do).
+  std::cout << "  [measured] least V_SUB's r unusable and passed over in " << passed_over << " of 6 seeds\n";
+  EXPECT_GE(passed_over, 1);
 }
 
 // ---------------------------------------------------------------------------

@@ -9,6 +9,8 @@
 #include <random>
 #include <set>
 
+#include <boost/math/distributions/chi_squared.hpp>
+
 #include "fdsid/error.hpp"
 #include "numerics/complex.hpp"
 #include "numerics/constants.hpp"
@@ -800,31 +802,13 @@ Eigen::VectorXd frf_singular_values(const FrfData& data, int r, ContinuousMethod
 }
 
 // The warning for an unstable estimate, or "" (issue 14: identify-frf said
-// nothing). Unstable: a pole of modulus >= 1 (discrete) or real part >= 0
-// (continuous); the worst one is named first and, when there are more, all of
-// them, worst first (a user review: the Silverbox at --allow-unstable has six,
-// the warning named one). The subspace estimate interpolates the data and
-// does not enforce stability, so this is a property of the result, not an
-// error.
+// nothing; unstable_poles_text names them). The subspace estimate
+// interpolates the data and does not enforce stability, so this is a
+// property of the result, not an error.
 std::string instability_warning(Domain domain, const Eigen::VectorXcd& poles) {
-  const bool discrete = domain == Domain::Discrete;
-  const auto margin = [&](Eigen::Index i) { return discrete ? std::abs(poles(i)) - 1 : poles(i).real(); };
-  std::vector<Eigen::Index> unstable;  // |λ| − 1 or Re λ >= 0
-  for (Eigen::Index i = 0; i < poles.size(); ++i)
-    if (margin(i) >= 0) unstable.push_back(i);
+  const std::string unstable = unstable_poles_text(domain, poles);
   if (unstable.empty()) return "";
-  std::stable_sort(unstable.begin(), unstable.end(), [&](Eigen::Index a, Eigen::Index b) { return margin(a) > margin(b); });
-  const auto text = [&](Eigen::Index i) {
-    return pole_text(poles(i)) + (discrete ? " of modulus " + fmt(std::abs(poles(i)), 6) : std::string());
-  };
-  std::string all;
-  if (unstable.size() > 1) {
-    all = " (" + std::to_string(unstable.size()) + " unstable poles:";
-    for (size_t k = 0; k < unstable.size(); ++k) all += (k ? ", " : " ") + text(unstable[k]);
-    all += ")";
-  }
-  return "the identified model is unstable: pole " + text(unstable[0]) +
-         (discrete ? " >= 1" : " with real part >= 0") + all +
+  return "the identified model is unstable: " + unstable +
          "; it fits the data's frequency response but must not be simulated: try another --order or --r";
 }
 
@@ -1156,6 +1140,37 @@ AutomaticOrder automatic_order(const FrfData& d, const FrfOptions& o, int r_feas
   return a;
 }
 
+// The r search's choice when the least V_SUB's estimate is unusable in double
+// precision (no correct digit of Ĝ or the poles: the F-16 FRF in Hz at order
+// 10 chose r = 49, unusable, where r = 44 gives a usable model with V_SUB
+// 0.9 % higher): V_SUB of a model the rounding has destroyed is not a
+// measure of the data's fit, so the r are tried again, assessed, in
+// increasing V_SUB, and the first usable one is taken, with a note naming
+// both. When none is usable the least V_SUB's estimate stays, with its
+// warning and one more saying every r was tried.
+FrfResult least_v_sub_usable(const FrfData& d, const FrfOptions& o, int order, FrfResult unusable,
+                             std::vector<std::pair<int, double>> scan) {
+  std::stable_sort(scan.begin(), scan.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+  for (const auto& [r, v] : scan) {
+    if (r == unusable.r) continue;
+    FrfResult res = identify_frf_fixed(d, order, r, o.continuous, o.omega_scale, o.discrete, true);
+    if (!usable_precision(res.usability_estimate())) continue;
+    const double error = unusable.usability_estimate();
+    res.notes.push_back("r = " + std::to_string(r) + " chosen, the least V_SUB (Eq. 35) of the r whose estimate is usable " +
+                        "in double precision: r = " + std::to_string(unusable.r) + " has the least V_SUB (" +
+                        fmt(unusable.v_sub, 6) + "; " + fmt(res.v_sub, 6) + " at r = " + std::to_string(r) + ", " +
+                        fmt(100 * (res.v_sub / unusable.v_sub - 1), 2) + " % more) but its estimate is unusable (" +
+                        (std::isfinite(error) ? "estimated relative error of G or the poles " + fmt(error, 2)
+                                              : std::string("a rounding-size move of its inputs made the estimate fail")) +
+                        ")");
+    res.r_unusable_least_v_sub = unusable.r;
+    return res;
+  }
+  unusable.warnings.push_back("no r the search tried (" + std::to_string(scan.size()) +
+                              " values) gives an estimate usable in double precision; the least V_SUB's is kept");
+  return unusable;
+}
+
 }  // namespace
 
 FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
@@ -1199,6 +1214,8 @@ FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
     // same estimate again, assessed: one more run instead of one per r).
     if (best.error_estimate > kPrecisionWarningLevel)
       best = identify_frf_fixed(d, order, best.r, o.continuous, o.omega_scale, o.discrete, true);
+    if (!usable_precision(best.usability_estimate()))
+      best = least_v_sub_usable(d, o, order, std::move(best), scan);
     best.r_scan = std::move(scan);
   }
   if (automatic.sigma.size() > 0) {
@@ -1414,7 +1431,7 @@ SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, c
 }
 
 FrfData record_known_noise(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta, Domain domain,
-                           const std::vector<double>& noise_std) {
+                           const std::vector<double>& noise_std, std::vector<std::string>* warnings) {
   if (meta.periods < 1)
     fail(ErrorKind::Input, "meta field \"periods\"", "M = " + std::to_string(meta.periods) + ": no period");
   check_records(samples, inputs, meta);
@@ -1447,6 +1464,31 @@ FrfData record_known_noise(const Eigen::MatrixXd& samples, int inputs, const Rec
     d.variance.push_back(var);
   }
   d.has_noise_model = true;
+  if (warnings && meta.periods >= 2) {
+    // The scatter test of the header: T_a = 2 S_a / σ_a², S_a the squared
+    // deviations from the period mean over every line and period.
+    const double nu = 2.0 * F * (meta.periods - 1);
+    const boost::math::chi_squared law(nu);
+    const double level = 1e-3;
+    const double lo = boost::math::quantile(law, level / 2), hi = boost::math::quantile(boost::math::complement(law, level / 2));
+    for (int a = 0; a < outputs; ++a) {
+      const double s = noise_std.size() == 1 ? noise_std[0] : noise_std[static_cast<size_t>(a)];
+      double S = 0;
+      for (int k = 0; k < F; ++k)
+        for (int l = 0; l < meta.periods; ++l) S += std::norm(spectra[l][k](inputs + a) - d.Y[k](a));
+      const double T = 2 * S / (s * s);
+      if (T >= lo && T <= hi) continue;
+      const double implied = std::sqrt(S / (F * (meta.periods - 1)));  // E|V(k) − V̄(k)|² = σ² (M − 1)/M per period
+      warnings->push_back(
+          "--noise-std " + fmt(s, 4) + (outputs > 1 ? " of output " + std::to_string(a + 1) : std::string()) +
+          " disagrees with the record: the output's scatter over the " + std::to_string(meta.periods) +
+          " periods at the excited lines is that of a noise std of " + fmt(implied, 4) + " (variance ratio " +
+          fmt(T / nu, 3) + ", outside its 99.9 % interval " + fmt(lo / nu, 3) + " ... " + fmt(hi / nu, 3) +
+          " under white noise of the std given); the fit verdict and any refinement weigh the residuals by "
+          "--noise-std: check its units (a std per sample, not a variance) and whether the first periods hold a transient "
+          "(--skip-periods), or drop it to use the sample variance (M >= 4 periods)");
+    }
+  }
   return d;
 }
 

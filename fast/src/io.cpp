@@ -830,6 +830,7 @@ nlohmann::json frf_result_to_json(const FrfResult& r, const std::string& method)
   nlohmann::json scan = nlohmann::json::array();
   for (const auto& [rr, v] : r.r_scan) scan.push_back({{"r", rr}, {"v_sub", v}});
   j["r_scan"] = scan;
+  if (r.r_unusable_least_v_sub > 0) j["r_unusable_least_v_sub"] = r.r_unusable_least_v_sub;
   j["diagnostics"] = {{"condition", r.condition},
                       {"error_estimate", r.error_estimate},
                       {"error_estimate_of", r.error_estimate_of},

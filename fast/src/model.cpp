@@ -72,14 +72,32 @@ bool unstable_pole(Domain domain, cplx pole) {
   return domain == Domain::Discrete ? std::abs(pole) >= 1 : pole.real() >= 0;
 }
 
-void require_stable(const StateSpace& m, const std::string& use) {
-  const Eigen::VectorXcd lambda = poles(m);
-  for (Eigen::Index i = 0; i < lambda.size(); ++i) {
-    if (unstable_pole(m.domain, lambda(i)))
-      throw Error(ErrorKind::Input, "model",
-                  "has an unstable pole " + pole_text(lambda(i)) + ": an unstable model has no periodic steady state " +
-                      use + " (identify with the default reflection of unstable poles, not --allow-unstable)");
+std::string unstable_poles_text(Domain domain, const Eigen::VectorXcd& poles) {
+  const bool discrete = domain == Domain::Discrete;
+  const auto margin = [&](Eigen::Index i) { return discrete ? std::abs(poles(i)) - 1 : poles(i).real(); };
+  std::vector<Eigen::Index> unstable;  // |λ| − 1 or Re λ >= 0
+  for (Eigen::Index i = 0; i < poles.size(); ++i)
+    if (unstable_pole(domain, poles(i))) unstable.push_back(i);
+  if (unstable.empty()) return "";
+  std::stable_sort(unstable.begin(), unstable.end(), [&](Eigen::Index a, Eigen::Index b) { return margin(a) > margin(b); });
+  const auto text = [&](Eigen::Index i) {
+    return pole_text(poles(i)) + (discrete ? " of modulus " + fmt(std::abs(poles(i)), 6) : std::string());
+  };
+  std::string all;
+  if (unstable.size() > 1) {
+    all = " (" + std::to_string(unstable.size()) + " unstable poles:";
+    for (size_t k = 0; k < unstable.size(); ++k) all += (k ? ", " : " ") + text(unstable[k]);
+    all += ")";
   }
+  return "pole " + text(unstable[0]) + (discrete ? " >= 1" : " with real part >= 0") + all;
+}
+
+void require_stable(const StateSpace& m, const std::string& use) {
+  const std::string unstable = unstable_poles_text(m.domain, poles(m));
+  if (!unstable.empty())
+    throw Error(ErrorKind::Input, "model",
+                "has an unstable " + unstable + ": an unstable model has no periodic steady state " + use +
+                    " (identify with the default reflection of unstable poles, not --allow-unstable)");
 }
 
 double spectral_radius(const StateSpace& m) {

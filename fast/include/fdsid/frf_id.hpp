@@ -110,6 +110,10 @@ struct FrfResult {
   double v_sub = 0;  ///< Eq. (35) at the estimate
   /// V_SUB for every r tried (empty when r was given).
   std::vector<std::pair<int, double>> r_scan;
+  /// The r of least V_SUB when its estimate was unusable in double precision
+  /// and the search took the least V_SUB among usable ones instead (a note
+  /// says so); 0 otherwise.
+  int r_unusable_least_v_sub = 0;
   Eigen::VectorXcd poles;
   /// The automatic order stopped at the top of its search range (a warning says so).
   bool order_at_search_cap = false;
@@ -337,8 +341,16 @@ SampleStatistics record_statistics(const Eigen::MatrixXd& samples, int inputs, c
 /// Pintelon (2002) Section 3 (Theorem 1: consistent for any M); the input is
 /// taken as noise-free. Fails: as record_statistics (but M ≥ 1), and a
 /// noise_std list of the wrong length or a value ≤ 0.
+/// warnings (M ≥ 2): the given σ_i against the outputs' scatter over the
+/// periods (a std given as a variance, in other units, or for another
+/// sensor: the fit verdict and the refinement would weigh every residual
+/// wrongly). Method: under white Gaussian noise of std σ the deviations from
+/// the mean of M periods at F lines give T = 2 Σ|Y_l(k) − Ȳ(k)|²/σ² ~ χ² with
+/// ν = 2 F (M − 1) degrees of freedom; a warning when T falls outside the
+/// two-sided 99.9 % interval of that law (false-alarm rate 1e-3 when σ is
+/// right), naming the std the scatter implies.
 FrfData record_known_noise(const Eigen::MatrixXd& samples, int inputs, const RecordMeta& meta, Domain domain,
-                           const std::vector<double>& noise_std);
+                           const std::vector<double>& noise_std, std::vector<std::string>* warnings = nullptr);
 
 /// Section 5, errors-in-variables (SISO): U = 1, Ĝ = Ŷ/Û and variance σ̂²_G / M.
 /// Eq. (31) as printed divides σ̂_YU by Ŷ Û; the first-order expansion

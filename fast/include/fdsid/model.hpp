@@ -46,10 +46,16 @@ std::string pole_text(cplx z);
 /// Whether a pole is unstable: discrete |z| >= 1, continuous Re s >= 0.
 bool unstable_pole(Domain domain, cplx pole);
 
-/// Throws Error(Input) naming the first unstable pole (discrete: |z| >= 1;
-/// continuous: Re s >= 0) when the model is not stable: an unstable model has
-/// no periodic steady state, and `use` says what needed one ("to compare",
-/// "to record", ...).
+/// The unstable poles as text, or "" when there is none: the worst one first,
+/// "pole Z of modulus M >= 1" (discrete) or "pole S with real part >= 0"
+/// (continuous), and when there are more, all of them, worst first, in
+/// parentheses (a user review: the Silverbox at --allow-unstable has six and
+/// the warning named one).
+std::string unstable_poles_text(Domain domain, const Eigen::VectorXcd& poles);
+
+/// Throws Error(Input) naming the unstable poles (unstable_poles_text) when
+/// the model is not stable: an unstable model has no periodic steady state,
+/// and `use` says what needed one ("to compare", "to record", ...).
 void require_stable(const StateSpace& model, const std::string& use);
 
 /// The largest pole modulus, max |λ_i(A)| (0 for order 0); a discrete-time
