@@ -1141,10 +1141,11 @@ AutomaticOrder automatic_order(const FrfData& d, const FrfOptions& o, int r_feas
 }
 
 // The r search's choice when the least V_SUB's estimate is unusable in double
-// precision (no correct digit of Ĝ or the poles: the F-16 FRF in Hz at order
-// 10 chose r = 49, unusable, where r = 44 gives a usable model with V_SUB
-// 0.9 % higher): V_SUB of a model the rounding has destroyed is not a
-// measure of the data's fit, so the r are tried again, assessed, in
+// precision (no correct digit of Ĝ or the poles: the F-16's Voltage →
+// Acceleration3 FRF, continuous time, order 12, chose r = 46, where
+// rounding-size moves of C_Y make step 1c fail; r = 44 gives a usable model
+// with V_SUB 0.07 % higher): a model rounding alone decides is not one a
+// user can reproduce or rely on, so the r are tried again, assessed, in
 // increasing V_SUB, and the first usable one is taken, with a note naming
 // both. When none is usable the least V_SUB's estimate stays, with its
 // warning and one more saying every r was tried.
