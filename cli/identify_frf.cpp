@@ -238,7 +238,6 @@ int run(const IdentifyFrfCommand& c) {
     throw Error(ErrorKind::Input, "--noise-std",
                 "the 50-digit reference reads records with their sample variance only; drop --precision high "
                 "(or give M >= 4 periods without --noise-std)");
-  if (c.options.r < 0 || c.options.r_max < 0) throw Error(ErrorKind::Input, "--r", "must be positive");
   if (c.refine && c.improper)
     throw Error(ErrorKind::Input, "--refine ml",
                 "refines G (with output or errors-in-variables noise), not the inverse model of --improper: drop one");

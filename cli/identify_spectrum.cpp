@@ -45,7 +45,6 @@ nlohmann::json refinement_json(const SpectrumRefineResult& r, const SpectrumResu
 }
 
 int run(const IdentifySpectrumCommand& c) {
-  if (c.options.p < 0 || c.options.r < 0) throw Error(ErrorKind::Input, c.options.p < 0 ? "--p" : "--r", "must be positive");
   if (c.precision == Precision::High && c.refine)
     throw Error(ErrorKind::Input, "--refine", "refines the double-precision estimate; not with --precision high");
   require_refinement_for_limit(c.max_iterations, c.refine, "--refine");
