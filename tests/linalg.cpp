@@ -2,6 +2,12 @@
 
 #include <Eigen/Dense>
 
+// Every decomposition used below is one fast/ instantiates once
+// (fast/src/numerics/eigen_instances.hpp): declared extern here, the tests use
+// fast/'s compiled copy (the same Eigen template code) instead of compiling
+// their own — 43 s of each CI build's compile, ~3 s now.
+#include "numerics/eigen_instances.hpp"
+
 namespace fdsid::testing {
 
 Eigen::VectorXd singular_values(const Eigen::MatrixXd& X) { return Eigen::JacobiSVD<Eigen::MatrixXd>(X).singularValues(); }
