@@ -9,14 +9,15 @@
 // 2.2 (algorithm2_1_bilinear, algorithm2_2_orthogonal) wrap it, and
 // identify_frf checks the input and dispatches.
 //
-// Decompositions instantiated in this translation unit (each costs seconds of
-// compile time with the multiprecision scalar): LLT, JacobiSVD and
+// Decompositions used here (each costs seconds of compile time with the
+// multiprecision scalar; compiled once, eigen_instances.hpp): LLT, JacobiSVD and
 // ColPivHouseholderQR over MatrixR. Complex linear systems are solved in their
 // real 2n × 2n form so that no complex decomposition is needed; eigenvalues
 // come from eigenvalues() of spectrum_id.cpp.
 #include "fdsid/reference/frf_id.hpp"
 
 #include "common.hpp"
+#include "eigen_instances.hpp"
 
 #include <Eigen/Dense>
 

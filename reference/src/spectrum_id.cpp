@@ -5,15 +5,16 @@
 // purpose, method (the paper's equations), numerical aspects, failures and
 // references; identify_spectrum is the sequence of step calls.
 //
-// Every Eigen decomposition over Real/Complex is instantiated in this one
-// translation unit (JacobiSVD, EigenSolver, HouseholderQR, LLT over MatrixR;
-// PartialPivLU over MatrixC): each costs seconds
-// of compile time with a multiprecision scalar, so other files only call the
-// functions declared in spectrum_id.hpp.
+// The Eigen decompositions over Real/Complex (JacobiSVD, EigenSolver,
+// HouseholderQR, LLT over MatrixR; PartialPivLU over MatrixC) are called here
+// and in frf_id.cpp only, and compiled once (eigen_instances.hpp): each costs
+// seconds of compile time with a multiprecision scalar, so other files only
+// call the functions declared in spectrum_id.hpp.
 #include "fdsid/reference/spectrum_id.hpp"
 #include "fdsid/reference/frf_id.hpp"  // frequency_response
 
 #include "common.hpp"
+#include "eigen_instances.hpp"
 
 #include <Eigen/Dense>
 
