@@ -104,17 +104,21 @@ CLI::Validator count_at_least(long lo) {
 
 CLI::Validator whole_count() { return count_at_least(0); }
 
-CLI::Validator finite_number(double lo, bool lo_allowed) {
-  const std::string bound = (lo_allowed ? ">= " : "> ") + fmt(lo, 6);
+CLI::Validator number_where(std::function<bool(double)> accepts, const std::string& what, const std::string& type_name) {
   return CLI::Validator(
-      [lo, lo_allowed, bound](std::string& s) -> std::string {
+      [accepts = std::move(accepts), what](std::string& s) -> std::string {
         char* end = nullptr;
         const double x = std::strtod(s.c_str(), &end);
-        if (s.empty() || *end != '\0' || !std::isfinite(x) || (lo_allowed ? x < lo : x <= lo))
-          return "\"" + s + "\" is not a finite number " + bound;
+        if (s.empty() || *end != '\0' || !std::isfinite(x) || !accepts(x)) return "\"" + s + "\" is not " + what;
         return {};
       },
-      "FLOAT" + bound);
+      type_name);
+}
+
+CLI::Validator finite_number(double lo, bool lo_allowed) {
+  const std::string bound = (lo_allowed ? ">= " : "> ") + fmt(lo, 6);
+  return number_where([lo, lo_allowed](double x) { return lo_allowed ? x >= lo : x > lo; }, "a finite number " + bound,
+                      "FLOAT" + bound);
 }
 
 CLI::Validator output_path(const std::string& option) {
@@ -175,16 +179,8 @@ void add_frequency_unit_options(CLI::App* sub, FrequencyUnits& units) {
   sub->add_option("--sample-time", units.sample_time_text,
                   "discrete time: the FRF's omega column is per second and Ts (s) the sample time (omega x Ts in "
                   "rad/sample; the model carries Ts); default: the column is per sample")
-      ->check(CLI::Validator(
-          [&units](std::string& s) -> std::string {
-            char* end = nullptr;
-            const double v = std::strtod(s.c_str(), &end);
-            if (end == s.c_str() || *end != '\0' || !(v > 0) || !std::isfinite(v))
-              return "\"" + s + "\" is not a positive number of seconds";
-            units.sample_time = v;
-            return {};
-          },
-          "Ts"));
+      ->check(number_where([](double v) { return v > 0; }, "a positive number of seconds", "Ts"))
+      ->each([&units](const std::string& s) { units.sample_time = std::strtod(s.c_str(), nullptr); });
 }
 
 void add_strict_option(CLI::App* sub, bool& strict) {

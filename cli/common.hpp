@@ -88,6 +88,10 @@ CLI::Validator whole_count();
 /// A whole number in [lo, 2^31 − 1] (--r: 0 there had meant "choose it"
 /// silently, a user review found).
 CLI::Validator count_at_least(long lo);
+/// A finite decimal number x (the whole text) with accepts(x); anything else
+/// is refused at parse time as "\"TEXT\" is not <what>", which CLI11 prefixes
+/// with the option's name. type_name: the value's name in --help.
+CLI::Validator number_where(std::function<bool(double)> accepts, const std::string& what, const std::string& type_name);
 /// A finite number above lo (or at least lo): nan, inf and out-of-range
 /// values are refused by the option's name (--omega-scale -1 and nan were
 /// silently replaced by the default, a user review found).

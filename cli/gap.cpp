@@ -387,14 +387,7 @@ void register_gap_diagnosis(CLI::App& app, Action& chosen) {
   gap->add_option("--table", c->table_path, "write the plot-ready table (frequency, t before/after, flag) here")->check(output_path("--table"));
   // Levels checked at parse time, named by their option (review finding 21:
   // "--alpha 5" was blamed on the data file).
-  const CLI::Validator level(
-      [](std::string& v) -> std::string {
-        char* end = nullptr;
-        const double x = std::strtod(v.c_str(), &end);
-        if (v.empty() || *end != '\0' || !(x > 0 && x < 1)) return "\"" + v + "\" is not a level in (0, 1)";
-        return {};
-      },
-      "(0, 1)");
+  const CLI::Validator level = number_where([](double x) { return x > 0 && x < 1; }, "a level in (0, 1)", "(0, 1)");
   gap->add_option("--alpha", o.alpha, "level of each detection test (default 0.01)")->check(level);
   gap->add_option("--effect-alpha", o.effect_alpha, "level of the test admitting an effect: a linear effect's F-test, leakage's transient test (default 1e-3)")
       ->check(level);

@@ -168,14 +168,8 @@ void register_records(CLI::App& app, Action& chosen) {
   val->add_option("--data", v->data_path, "periodic records CSV")->required();
   val->add_option("--meta", v->meta_path, "meta JSON of the records")->required();
   val->add_option("--min-fit", v->min_fit, "exit 1 when an output's fit is below this many percent (default: no threshold)")
-      ->check(CLI::Validator(
-          [](std::string& s) -> std::string {  // a fit is 100 % at best: --min-fit 150 always failed
-            char* end = nullptr;
-            const double v = std::strtod(s.c_str(), &end);
-            if (s.empty() || *end != '\0' || !(v <= 100)) return "\"" + s + "\" is not a percentage <= 100";
-            return {};
-          },
-          "PERCENT<=100"));
+      // a fit is 100 % at best: --min-fit 150 always failed
+      ->check(number_where([](double v) { return v <= 100; }, "a percentage <= 100", "PERCENT<=100"));
   add_json_option(val, v->json_path, "write the fit here (- = stdout)");
   add_record_selection_options(val, v->selection);
   on_parsed(val, v, chosen, run_validate);
