@@ -1444,6 +1444,10 @@ FrfData record_known_noise(const Eigen::MatrixXd& samples, int inputs, const Rec
   for (double s : noise_std)
     if (!(s > 0) || !std::isfinite(s))
       fail(ErrorKind::Input, "--noise-std", "must be positive and finite, got " + fmt(s, 6));
+  const auto std_of = [&](int a) { return noise_std.size() == 1 ? noise_std[0] : noise_std[static_cast<size_t>(a)]; };
+  // Eq. (4)'s 1/√P keeps white noise's E|V(k)|² = σ²; the mean of M periods: σ²/M, the same at every line.
+  Eigen::MatrixXd var(outputs, 1);
+  for (int a = 0; a < outputs; ++a) var(a, 0) = std_of(a) * std_of(a) / meta.periods;
   const auto spectra = period_spectra(samples, meta.period, meta.periods, meta.excited_lines);
   const int F = static_cast<int>(meta.excited_lines.size());
   FrfData d;
@@ -1456,12 +1460,6 @@ FrfData record_known_noise(const Eigen::MatrixXd& samples, int inputs, const Rec
     mean /= meta.periods;
     d.U.push_back(mean.head(inputs));
     d.Y.push_back(mean.tail(outputs));
-    // Eq. (4)'s 1/√P keeps white noise's E|V(k)|² = σ²; the mean of M periods: σ²/M.
-    Eigen::MatrixXd var(outputs, 1);
-    for (int a = 0; a < outputs; ++a) {
-      const double s = noise_std.size() == 1 ? noise_std[0] : noise_std[static_cast<size_t>(a)];
-      var(a, 0) = s * s / meta.periods;
-    }
     d.variance.push_back(var);
   }
   d.has_noise_model = true;
@@ -1473,7 +1471,7 @@ FrfData record_known_noise(const Eigen::MatrixXd& samples, int inputs, const Rec
     const double level = 1e-3;
     const double lo = boost::math::quantile(law, level / 2), hi = boost::math::quantile(boost::math::complement(law, level / 2));
     for (int a = 0; a < outputs; ++a) {
-      const double s = noise_std.size() == 1 ? noise_std[0] : noise_std[static_cast<size_t>(a)];
+      const double s = std_of(a);
       double S = 0;
       for (int k = 0; k < F; ++k)
         for (int l = 0; l < meta.periods; ++l) S += std::norm(spectra[l][k](inputs + a) - d.Y[k](a));
