@@ -1,6 +1,11 @@
 // Model JSON and spectrum CSV readers of the contracts.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -219,6 +224,42 @@ TEST(Csv, ReadsBomQuotesAndTrailingCommas) {
   // Without a trailing comma in the header, an empty last cell is still an empty value.
   std::istringstream empty_cell("omega,S_re,S_im\n0,2,\n3.141592653589793,4,0\n");
   EXPECT_THROW(parse_spectrum_csv(empty_cell, "e.csv"), Error);
+}
+
+// An output path that names a symbolic link writes the link's target and
+// keeps the link; one that names a FIFO (as /dev/null names a device) writes
+// into it instead of replacing it by a renamed regular file (a user review:
+// --json link.json made the link a file, --json /dev/full replaced the device).
+// The FIFO's reader is opened non-blocking first, so the writer's open does not
+// wait and a regression fails instead of hanging.
+TEST(OutputFile, WritesThroughLinksAndSpecialFiles) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(::testing::TempDir()) / ("fdsid_output_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path target = dir / "target.json", link = dir / "link.json";
+  fs::create_symlink("target.json", link);  // relative, as ln -s writes it: a dangling link first
+  require_writable_path(link.string(), "--json");
+  write_text_file(link.string(), "one\n");
+  EXPECT_TRUE(fs::is_symlink(fs::symlink_status(link)));
+  std::ifstream t(target);
+  std::string line;
+  std::getline(t, line);
+  EXPECT_EQ(line, "one");
+
+  const fs::path fifo = dir / "fifo";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  const int reader = open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(reader, 0);
+  require_writable_path(fifo.string(), "--out");
+  write_text_file(fifo.string(), "two\n");
+  char buf[16] = {};
+  EXPECT_EQ(read(reader, buf, sizeof buf - 1), 4);
+  EXPECT_STREQ(buf, "two\n");
+  close(reader);
+  EXPECT_TRUE(fs::is_fifo(fs::status(fifo)));
+  EXPECT_FALSE(fs::exists(dir / "fifo.tmp-fdsid"));
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -866,10 +866,43 @@ nlohmann::json meta_to_json(const RecordMeta& meta) {
           {"excited_lines", meta.excited_lines}};
 }
 
+namespace {
+
+// The file an output path names: a symbolic link is followed (up to 40 links,
+// the kernel's limit), so that the file written is the link's target and the
+// link stays; a dangling link names the file it points to.
+std::filesystem::path output_target(const std::string& path) {
+  namespace fs = std::filesystem;
+  fs::path p(path);
+  std::error_code ec;
+  for (int links = 0; links < 40 && fs::is_symlink(fs::symlink_status(p, ec)); ++links) {
+    const fs::path to = fs::read_symlink(p, ec);
+    if (ec) break;
+    p = to.is_absolute() ? to : p.parent_path() / to;
+  }
+  return p;
+}
+
+// An existing output that is not a regular file (a device such as /dev/null,
+// a FIFO): written in place, not replaced by a renamed temporary.
+bool special_file(const std::filesystem::path& p) {
+  std::error_code ec;
+  const auto st = std::filesystem::status(p, ec);
+  return !ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) &&
+         !std::filesystem::is_directory(st);
+}
+
+}  // namespace
+
 void require_writable_path(const std::string& path, const std::string& option) {
   if (path == "-") return;
   namespace fs = std::filesystem;
-  const fs::path target(path);
+  const fs::path target = output_target(path);
+  if (special_file(target)) {
+    if (access(target.c_str(), W_OK) != 0)
+      input_error(option, "\"" + path + "\" is not writable (" + std::strerror(errno) + ")");
+    return;
+  }
   const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::error_code ec;
   if (!fs::is_directory(dir, ec))
@@ -885,7 +918,19 @@ void write_text_file(const std::string& path, const std::string& text) {
     std::cout.flush();
     return;
   }
-  const std::string tmp = path + ".tmp-fdsid";
+  // A new or regular file is written whole or not at all: a temporary beside
+  // it, renamed into place (a link's target, the link kept); a device or FIFO
+  // is written in place (renaming would replace /dev/null by a file).
+  const std::filesystem::path target = output_target(path);
+  if (special_file(target)) {
+    std::ofstream f(target, std::ios::binary);
+    if (!f) input_error(path, "cannot write output file");
+    f << text;
+    f.flush();
+    if (!f) input_error(path, "write failed");
+    return;
+  }
+  const std::string tmp = target.string() + ".tmp-fdsid";
   {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
     if (!f) input_error(path, "cannot write output file");
@@ -896,7 +941,7 @@ void write_text_file(const std::string& path, const std::string& text) {
       input_error(path, "write failed");
     }
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+  if (std::rename(tmp.c_str(), target.c_str()) != 0) {
     std::remove(tmp.c_str());
     input_error(path, "cannot rename the temporary output into place");
   }

@@ -121,12 +121,16 @@ nlohmann::json meta_to_json(const RecordMeta& meta);
 nlohmann::json frf_result_to_json(const FrfResult& result, const std::string& method);
 
 /// Checks, before any work, that write_text_file (or a figure) can create
-/// `path`: "-" (stdout) passes; else its folder must exist and be writable and
-/// the path must not be a folder. Throws Error(Input) at `option`.
+/// `path`: "-" (stdout) passes; a symbolic link is judged by the file it
+/// points to; an existing device or FIFO must be writable; else the folder
+/// must exist and be writable and the path must not be a folder. Throws
+/// Error(Input) at `option`.
 void require_writable_path(const std::string& path, const std::string& option);
 
 /// Writes text to path atomically (temporary file in the same folder, then
-/// rename), or to stdout when path is "-".
+/// rename), or to stdout when path is "-". A symbolic link is followed (its
+/// target written, the link kept); an existing device or FIFO is written in
+/// place, never replaced.
 void write_text_file(const std::string& path, const std::string& text);
 
 }  // namespace fdsid
