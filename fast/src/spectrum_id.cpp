@@ -567,7 +567,13 @@ Split step6_stable_split(const Eigen::MatrixXd& Atilde, int n) {
     const size_t shown = std::min<size_t>(moduli.size(), 12);
     std::sort(moduli.begin(), moduli.begin() + static_cast<std::ptrdiff_t>(shown));
     std::ostringstream list;
-    for (size_t i = 0; i < shown; ++i) list << (i ? ", " : "") << fmt(moduli[i], 4);
+    // Enough digits to show each modulus's side of the circle: 0.99998 at 4
+    // digits read "1" and was called inside (a user review).
+    for (size_t i = 0; i < shown; ++i) {
+      const double off = std::abs(moduli[i] - 1.0);
+      const int digits = off > 0 ? std::clamp(static_cast<int>(std::ceil(-std::log10(off))) + 2, 4, 17) : 17;
+      list << (i ? ", " : "") << fmt(moduli[i], digits);
+    }
     throw Error(ErrorKind::Split, "step 6",
                 "no stable/antistable split: " + std::to_string(sp.stable.size()) + " of the 2n = " +
                     std::to_string(2 * n) + " eigenvalues of A lie inside the unit circle, n = " + std::to_string(n) +
