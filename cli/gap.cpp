@@ -261,6 +261,13 @@ int run_gap(const GapCommand& c) {
   const ModelFile file = read_model_with_diagnostics(c.model_path);
   const StateSpace& model = file.model;
   const std::string& unusable = file.unusable;
+  // The model's own fault is named with the model's file (diagnose_gap checks
+  // it again, and its errors are the record's: they would name the data file).
+  try {
+    require_stable(model, "to compare with the record");
+  } catch (const Error& e) {
+    throw e.within(c.model_path);
+  }
   const std::string columns_note = selection_against_model(file.json, c.selection, c.model_path);
   const Records records = read_records(c.data_path, c.meta_path, c.selection);
   const RecordMeta& meta = records.meta;

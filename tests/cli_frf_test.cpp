@@ -977,6 +977,11 @@ TEST_F(CliFrf, SimulateRecordsRefusesWhatIdentifyFrfWouldRefuse) {
   const json j = json::parse(ok.out);
   EXPECT_EQ(j.at("samples").get<int>(), 256);
   EXPECT_EQ(j.at("meta").at("period").get<int>(), 64);
+  // gap refuses the unstable model naming its file, not the record's (a user
+  // review: "…Level7.csv: model: has an unstable pole").
+  const RunResult g = run_fdsid({"gap", "--model", unstable, "--data", path("c.csv"), "--meta", path("c.meta.json")});
+  EXPECT_TRUE(IsBadInput(g, {"unstable.json: model", "no periodic steady state"}));
+  EXPECT_EQ(g.err.find("c.csv"), std::string::npos) << describe(g);
 }
 
 // Review finding 21: three cases printed "subtle or paired nan" and then
