@@ -674,6 +674,13 @@ TEST_F(Cli, CheckRejectsAnEntryMovedByOneTenTrillionth) {
   EXPECT_EQ(r.status, 1) << describe(r);
   const json j = json::parse(r.out);
   EXPECT_GT(j.at("pole_distance").get<double>(), j.at("tolerance").at("poles").get<double>());
+  // The note says what the comparison assumed (the candidate gives no p, r,
+  // method, extension) and that 13 digits cannot be checked at this
+  // tolerance: the reference rounded to 13 digits disagrees too (its poles
+  // move by ~1e-13 against the tolerance 1.3e-14).
+  const std::string note = j.at("note").get<std::string>();
+  EXPECT_NE(note.find("compared at p = "), std::string::npos) << note;
+  EXPECT_NE(note.find("carry at most 13 significant digits"), std::string::npos) << note;
 }
 
 // The classic mistake of step 9 (the anti-stabilising Riccati root): a factor
@@ -788,6 +795,10 @@ TEST_F(Cli, CheckRefusesBadCandidates) {
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", nonsquare, "--data", data}), {"square"}));
   const std::string badp = write("bp.json", R"({"domain":"discrete","sample_time":1,"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]],"p":-3})");
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", badp, "--data", data}), {"\"p\""}));
+  // A continuous-time candidate is named by its file, with the fix (a user
+  // review: "candidate: must be a discrete-time model", after the reference ran).
+  const std::string cont = write("cont.json", R"({"domain":"continuous","A":[[-0.5]],"B":[[1]],"C":[[1]],"D":[[1]]})");
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", cont, "--data", data}), {"cont.json", "continuous", "--frf"}));
 }
 
 // ---------------------------------------------------------------------------

@@ -46,6 +46,23 @@ StateSpace reflected() { return second_order(-0.5, 1.15, -0.3, kA1, kA2); }
 // zero moves (1.5).
 constexpr double kRounding = 1e3 * kU;
 
+// The digits a model file carries: the most any entry needs to be read back
+// exactly; rounding to them changes nothing, to one fewer changes something.
+TEST(DigitsCarried, CountsTheLongestShortestDecimal) {
+  StateSpace m;
+  m.A = Eigen::MatrixXd::Constant(1, 1, 0.5);
+  m.B = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  m.C = Eigen::MatrixXd::Constant(1, 1, 0.12345678);
+  m.D = Eigen::MatrixXd::Constant(1, 1, -2.5e-3);
+  EXPECT_EQ(digits_carried(m), 8);
+  EXPECT_EQ(rounded_to_digits(m, 8).C(0, 0), m.C(0, 0));
+  EXPECT_EQ(rounded_to_digits(m, 7).C(0, 0), 0.1234568);
+  m.C(0, 0) = 1.0 / 3.0;
+  EXPECT_EQ(digits_carried(m), 16);  // 0.3333333333333333
+  m.C(0, 0) = 0.1 + 0.2;
+  EXPECT_EQ(digits_carried(m), 17);  // 0.30000000000000004
+}
+
 TEST(CompareFactors, AReflectedZeroKeepsTheSpectrumButNotTheFactor) {
   const ModelComparison c = compare_models(reflected(), minimum_phase());
   EXPECT_LT(c.pole_distance, kRounding);

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <random>
 #include <tuple>
@@ -161,6 +163,34 @@ std::vector<StateSpace> randomly_moved(const StateSpace& model, double size, int
     }
     out.push_back(moved);
   }
+  return out;
+}
+
+namespace {
+double round_to_digits(double x, int digits) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.*e", digits - 1, x);
+  return std::strtod(buf, nullptr);
+}
+}  // namespace
+
+int digits_carried(const StateSpace& model) {
+  int most = 1;
+  for (const Eigen::MatrixXd* X : {&model.A, &model.B, &model.C, &model.D})
+    for (Eigen::Index k = 0; k < X->size(); ++k) {
+      const double x = (*X)(k);
+      if (!std::isfinite(x)) continue;
+      int d = 1;
+      while (d < 17 && round_to_digits(x, d) != x) ++d;
+      most = std::max(most, d);
+    }
+  return most;
+}
+
+StateSpace rounded_to_digits(const StateSpace& model, int digits) {
+  StateSpace out = model;
+  for (Eigen::MatrixXd* X : {&out.A, &out.B, &out.C, &out.D})
+    for (Eigen::Index k = 0; k < X->size(); ++k) (*X)(k) = round_to_digits((*X)(k), digits);
   return out;
 }
 

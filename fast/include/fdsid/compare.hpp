@@ -88,6 +88,19 @@ struct OracleQuantity {
 /// Fails: never.
 std::vector<StateSpace> randomly_moved(const StateSpace& model, double size, int count);
 
+/// Purpose: how many significant decimal digits a model file carries — the
+/// most any entry of A, B, C, D needs to be read back exactly (its shortest
+/// round-trip decimal: 17 for a double written with %.17g, 8 for one
+/// written with %.8g). An oracle's candidate written with fewer digits than
+/// its comparison resolves disagrees for that reason alone.
+/// Fails: never (an empty model carries 1).
+int digits_carried(const StateSpace& model);
+
+/// Purpose: the model with every entry of A, B, C, D rounded to `digits`
+/// significant decimal digits (what writing it with %.{digits}g does).
+/// Fails: never.
+StateSpace rounded_to_digits(const StateSpace& model, int digits);
+
 /// Purpose: first-order sensitivity s(ξ) of G(ξ) = D + C (ξI − A)⁻¹ B to
 /// relative perturbations of size 1 in each of A, B, C, D (‖δX‖ ≤ ‖X‖).
 /// Method: with R = (ξI − A)⁻¹, δG = δD + δC R B + C R δB + C R δA R B, so
