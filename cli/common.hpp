@@ -179,4 +179,9 @@ struct Out {
 /// "poles:  re+imi  ..." and a newline.
 void print_poles(Out& out, const Eigen::VectorXcd& poles);
 
+/// The record's excited lines outside the band the model was identified on
+/// (its JSON's "omega_band", identify-frf writes it), as a warning: "" when
+/// all lie inside or the model has no band. validate and gap both give it.
+std::string lines_outside_band(const nlohmann::json& model_json, const StateSpace& model, const RecordMeta& meta);
+
 }  // namespace fdsid::cli

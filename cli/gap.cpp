@@ -260,7 +260,6 @@ int run_gap(const GapCommand& c) {
   const GapOptions& o = c.options;
   const ModelFile file = read_model_with_diagnostics(c.model_path);
   const StateSpace& model = file.model;
-  const std::string& unusable = file.unusable;
   // The model's own fault is named with the model's file (diagnose_gap checks
   // it again, and its errors are the record's: they would name the data file).
   try {
@@ -270,6 +269,12 @@ int run_gap(const GapCommand& c) {
   }
   const std::string columns_note = selection_against_model(file.json, c.selection, c.model_path);
   const Records records = read_records(c.data_path, c.meta_path, c.selection);
+  // What validate warns about, gap too: the model file's own unusability, and
+  // the record's lines beyond the model's band (a user review: a meta with
+  // sample_time in ms typed as s gave a normal diagnosis in mHz).
+  std::vector<std::string> warnings;
+  if (!file.unusable.empty()) warnings.push_back(file.unusable);
+  if (std::string w = lines_outside_band(file.json, model, records.meta); !w.empty()) warnings.push_back(std::move(w));
   const RecordMeta& meta = records.meta;
   const int outputs = static_cast<int>(records.samples.cols()) - records.inputs;
   if (outputs > 1) {
@@ -292,13 +297,13 @@ int run_gap(const GapCommand& c) {
         << "to the noise), after " << sci(m.gap_after) << "; joint gap " << sci(m.gap_joint) << "\n";
     out << multi_verdict_line(m, names) << "\n";
     for (const std::string& n : m.notes) out << "note: " << n << "\n";
-    if (!unusable.empty()) out << "warning: " << unusable << "\n";
+    for (const std::string& w : warnings) out << "warning: " << w << "\n";
     for (size_t k = 0; k < m.channels.size(); ++k) {
       out << "== output " << k + 1 << " (" << names[k] << ")\n";
       print_report(out, m.channels[k], meta.periods);
     }
     nlohmann::json j = gap_report_to_json(m);
-    if (!unusable.empty()) j["warnings"] = {unusable};
+    if (!warnings.empty()) j["warnings"] = warnings;
     for (size_t k = 0; k < m.channels.size(); ++k) j["channels"][k]["name"] = names[k];
     emit_json(c.json_path, j);
     return 0;
@@ -311,10 +316,10 @@ int run_gap(const GapCommand& c) {
   }
   if (!columns_note.empty()) r.notes.push_back(columns_note);
   print_report(out, r, meta.periods);
-  if (!unusable.empty()) out << "warning: " << unusable << "\n";
+  for (const std::string& w : warnings) out << "warning: " << w << "\n";
   if (!c.table_path.empty()) write_gap_table(c.table_path, r);
   nlohmann::json j = to_json(r);
-  if (!unusable.empty()) j["warnings"] = {unusable};
+  if (!warnings.empty()) j["warnings"] = warnings;
   emit_json(c.json_path, j);
   emit_plot(c.plot_path, [&] { return plot::gap_figure(r, meta.periods); });
   return 0;

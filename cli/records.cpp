@@ -66,36 +66,6 @@ int run_frf(const FrfCommand& c) {
   return 0;
 }
 
-// Review finding 5 of stop 47: an F-16 model identified on 2-15 Hz scored
-// -4.06 % on a record to 60 Hz without a word. A model from identify-frf
-// carries the band of its data ("omega_band"); the record's excited lines
-// beyond it (by more than rounding, 1e-9 relative) are extrapolation and
-// named. A model without the field (another tool's) is scored as before.
-std::string lines_outside_band(const nlohmann::json& model_json, const StateSpace& model, const RecordMeta& meta) {
-  const nlohmann::json* band = model_json.contains("omega_band") ? &model_json["omega_band"] : nullptr;
-  if (!band || !band->is_array() || band->size() != 2 || !(*band)[0].is_number() || !(*band)[1].is_number()) return "";
-  const double lo = (*band)[0].get<double>(), hi = (*band)[1].get<double>();
-  // ω of line k: 2πk/P rad/sample, or 2πk/(P Ts) rad/s in continuous time.
-  const double per_line = 2 * M_PI / meta.period / (model.domain == Domain::Continuous ? meta.sample_time : 1.0);
-  const double to_hz = 1 / (2 * M_PI * (model.domain == Domain::Continuous ? 1.0 : meta.sample_time));
-  int below = 0, above = 0;
-  double lowest = lo, highest = hi;
-  for (int k : meta.excited_lines) {
-    const double w = k * per_line;
-    if (w < lo * (1 - 1e-9)) ++below, lowest = std::min(lowest, w);
-    if (w > hi * (1 + 1e-9)) ++above, highest = std::max(highest, w);
-  }
-  if (below + above == 0) return "";
-  std::string where;
-  if (below > 0) where = std::to_string(below) + " below it (down to " + fmt(lowest * to_hz, 4) + " Hz)";
-  if (above > 0)
-    where += (below > 0 ? ", " : "") + std::to_string(above) + " above it (up to " + fmt(highest * to_hz, 4) + " Hz)";
-  return std::to_string(below + above) + " of the record's " + std::to_string(meta.excited_lines.size()) +
-         " excited lines lie outside the band the model was identified on (" + fmt(lo * to_hz, 4) + " to " +
-         fmt(hi * to_hz, 4) + " Hz; Hz = cycles/sample when Ts = 1): " + where +
-         "; the fit there scores an extrapolation";
-}
-
 struct ValidateCommand {
   std::string model_path, data_path, meta_path, json_path;
   RecordSelection selection;
