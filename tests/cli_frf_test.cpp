@@ -684,6 +684,19 @@ TEST_F(CliFrf, ExcitedLinesWithoutInputPowerAreNamed) {
                           "1-based"}));
   EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", model, "--data", path("rec.csv"), "--meta", bad}),
                          {"63 of the 63 listed lines carry no input power"}));
+  // One listed line without input among the excited ones (a user review: the
+  // F-16's contiguous lines 41-307 listed 0-based as 40-306 left only line 40
+  // quiet, and were accepted): refused, the line named.
+  json one_more = read_json("rec.meta.json");
+  std::vector<int> lines = one_more.at("excited_lines").get<std::vector<int>>();
+  lines.insert(lines.begin() + 1, 2);  // an even line: the odd multisine leaves it out
+  one_more["excited_lines"] = lines;
+  const std::string extra = write("one_more.meta.json", one_more.dump());
+  EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", extra}),
+                         {"one_more.meta.json", "1 of the " + std::to_string(lines.size()) +
+                                                    " listed lines carries no input power (line 2:"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"gap", "--model", model, "--data", path("rec.csv"), "--meta", extra}),
+                         {"carries no input power (line 2:"}));
   // The right meta passes the same test.
   EXPECT_TRUE(Succeeded(run_fdsid({"identify-frf", "--data", path("rec.csv"), "--meta", path("rec.meta.json")})));
 }
