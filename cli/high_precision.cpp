@@ -110,12 +110,12 @@ int int_field(const json& cj, const char* key, const std::string& model_path) {
 
 // A candidate that disagrees while written with fewer significant digits
 // than the check resolves: the reference rounded to the same digits is
-// checked the same way (`fails_alike`), and when that rounding alone fails
-// too, the note says so and what to do (a user review: 8, 10 and 12 digits of
-// a correct model read DISAGREES with nothing about precision). "" otherwise.
-// `pole_distance_alike(rounded)`: the rounded reference's pole distance when
-// it fails the check, a negative number when it passes; the two pole
-// distances are printed so that a mistake beyond the rounding shows.
+// checked the same way (`pole_distance_alike(rounded)`: its pole distance
+// when it fails the check, a negative number when it passes), and when that
+// rounding alone fails too, the note says so and what to do (a user review:
+// 8, 10 and 12 digits of a correct model read DISAGREES with nothing about
+// precision); both pole distances are printed, so that a mistake beyond the
+// rounding shows. "" otherwise.
 template <class PoleDistanceAlike>
 std::string digits_note(const StateSpace& candidate, const StateSpace& ref, double candidate_pole_distance,
                         PoleDistanceAlike pole_distance_alike) {
