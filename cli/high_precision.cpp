@@ -209,7 +209,7 @@ int check(const std::string& json_path, const std::string& model_path, const std
   const auto assume = [&](const char* key, const std::string& value) {
     if (!cj.contains(key)) assumed += (assumed.empty() ? "" : ", ") + std::string(key) + " = " + value;
   };
-  assume("p", std::to_string(p) + (p_given ? "" : " (the default rule for M = " + std::to_string(M) + ")"));
+  assume("p", std::to_string(p) + " (the default rule for M = " + std::to_string(M) + ")");  // absent: not given
   assume("r", std::to_string(r));
   assume("method", vo ? "vo1997" : "akcay2011");
   assume("extension", to_string(ext));

@@ -522,9 +522,9 @@ double cost_rounding(const FrfData& d, const StateSpace& model, const RefineOpti
   double bound = 0;
   for (int k = 0; k < d.frequencies(); ++k) {
     const cplx G = frequency_response(model, d.omega(k))(0, 0), U = d.U(k, 0, 0), Y = d.Y(k, 0, 0);
-    double v = d.variance(k, 0, 0);
-    if (opt.input_variance.size() > 0)
-      v += std::norm(G) * opt.input_variance(k) - 2 * (opt.input_output_covariance(k) * std::conj(G)).real();
+    const double v = opt.input_variance.size() > 0 ? eiv_residual_variance(d.variance(k, 0, 0), opt.input_variance(k),
+                                                                            opt.input_output_covariance(k), G)
+                                                     : d.variance(k, 0, 0);
     bound += 2 * std::abs(Y - G * U) / std::sqrt(v) * gamma_r * (std::abs(Y) + std::abs(G) * std::abs(U)) / std::sqrt(v);
   }
   return bound;

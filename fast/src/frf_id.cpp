@@ -1368,17 +1368,15 @@ void require_input_power(const Eigen::MatrixXd& samples, int inputs, const Recor
                                     " of one period's energy, at the rounding floor 1e-20"
                               : "|U|^2 / (s^2_U / M) = " + sci(first_ratio) + ", below the 1 % point " + sci(q) +
                                     " of noise alone";
-  if (2 * quiet > F)
-    fail(ErrorKind::Input, "meta field \"excited_lines\"",
-         std::to_string(quiet) + " of the " + std::to_string(F) + " listed lines carry no input power (e.g. line " +
-             std::to_string(first_quiet) + ": " + why +
-             "): the excitation is on other lines; are the lines 1-based DFT indices k = 1 ... P/2 "
-             "(frequency k / (P Ts))?");
+  const bool most = 2 * quiet > F;  // the wrong lines altogether
   fail(ErrorKind::Input, "meta field \"excited_lines\"",
-       std::to_string(quiet) + " of the " + std::to_string(F) + " listed lines " + (quiet > 1 ? "carry" : "carries") +
-           " no input power (line " + std::to_string(first_quiet) + ": " + why +
-           "): list only the excited lines, as 1-based DFT indices k = 1 ... P/2 (frequency k / (P Ts)); a list "
-           "shifted by one (0-based) over a contiguous band leaves its first or last line without input");
+       std::to_string(quiet) + " of the " + std::to_string(F) + " listed lines " +
+           (most || quiet > 1 ? "carry" : "carries") + " no input power (" + (most ? "e.g. " : "") + "line " +
+           std::to_string(first_quiet) + ": " + why + "): " +
+           (most ? "the excitation is on other lines; are the lines 1-based DFT indices k = 1 ... P/2 (frequency k / "
+                   "(P Ts))?"
+                 : "list only the excited lines, as 1-based DFT indices k = 1 ... P/2 (frequency k / (P Ts)); a list "
+                   "shifted by one (0-based) over a contiguous band leaves its first or last line without input"));
 }
 
 int repeated_line(const std::vector<int>& lines) {
