@@ -954,6 +954,20 @@ TEST_F(CliFrf, AnFrfFromRecordsIsJudgedByTheSampleVarianceLawWithFrfPeriods) {
   EXPECT_DOUBLE_EQ(fb["expected"].get<double>(), fa["expected"].get<double>());
   EXPECT_NEAR(fb["p_bound"].get<double>(), fa["p_bound"].get<double>(), 1e-6 * fa["p_bound"].get<double>() + 1e-300);
   EXPECT_EQ(fk["periods"], 0) << fk.dump();  // without it: known variances, expected = T
+  // The bundled record's FRF read as known variances: the true order's
+  // subspace model is a misfit (p 8.9e-5), and the warning names the option
+  // that judges it by its law; with it, no misfit and no hint.
+  const std::string src = std::string(FDSID_SOURCE_DIR) + "/data/pintelon2002_P512_M8";
+  ASSERT_TRUE(Succeeded(run_fdsid({"frf", "--data", src + ".csv", "--meta", src + ".meta.json", "--out", path("b.csv")})));
+  const std::string hint = "give --frf-periods M";
+  const RunResult bk = run_fdsid({"identify-frf", "--frf", path("b.csv"), "--order", "4", "--r", "8", "--json", "-"});
+  const RunResult bm = run_fdsid(
+      {"identify-frf", "--frf", path("b.csv"), "--frf-periods", "8", "--order", "4", "--r", "8", "--json", "-"});
+  ASSERT_TRUE(Succeeded(bk) && Succeeded(bm)) << describe(bk) << describe(bm);
+  EXPECT_TRUE(json::parse(bk.out)["fit"]["misfit"].get<bool>()) << bk.out;
+  EXPECT_NE(json::parse(bk.out)["warnings"].dump().find(hint), std::string::npos) << bk.out;
+  EXPECT_FALSE(json::parse(bm.out)["fit"]["misfit"].get<bool>()) << bm.out;
+  EXPECT_EQ(json::parse(bm.out)["warnings"].dump().find(hint), std::string::npos) << bm.out;
   EXPECT_EQ(json::parse(b.out)["source"]["periods"], 8);
   EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--frf", path("g.csv"), "--frf-periods", "3"}), {"--frf-periods"}));
   EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", d, "--meta", m, "--frf-periods", "8"}), {"--frf-periods"}));

@@ -192,6 +192,7 @@ FitVerdict fit_verdict(const FrfResult& result, const FrfData& data, const FrfSo
   if (!f.available) return f;
   f.terms = data.frequencies() * data.outputs() * data.columns();
   f.periods = source.noise_std.empty() ? source.periods : 0;  // an FRF file's: --frf-periods
+  f.file_variance_as_known = !source.frf_path.empty() && f.periods == 0;
   double mean = 1, var = 1;  // Exp(1): known variance
   if (f.periods >= 4) {
     const double d = 2.0 * f.periods - 2;
@@ -235,7 +236,11 @@ std::string FitVerdict::warning() const {
          " times its expected value, p " + p_relation(p_bound, 2) +
          "): a higher order, " +
          (refined ? std::string() : "--refine ml (a subspace estimate need not be the best fit at its order), ") +
-         "a better noise model, or an effect the model lacks (fdsid gap) may explain the rest";
+         "a better noise model, or an effect the model lacks (fdsid gap) may explain the rest" +
+         (file_variance_as_known ? std::string("; if the file's G_var is a sample variance over M periods (fdsid frf "
+                                               "writes it so), give --frf-periods M: its terms are then judged as "
+                                               "F(2, 2M-2), not as known variances")
+                                 : std::string());
 }
 
 std::string OracleCheck::summary() const {

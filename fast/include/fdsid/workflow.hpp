@@ -86,6 +86,11 @@ struct FitVerdict {
   /// below P/4 (its resonance above them) has V_SUB 12–56 × its expected value
   /// at r = 8–24, the ML refinement from it 1.00 ×.
   bool refined = false;
+  /// The variances are an FRF file's G_var read as known (no --frf-periods):
+  /// if they are sample variances over M periods (fdsid frf writes them so),
+  /// the terms are F(2, 2M−2), heavier-tailed than Exp(1), and the test errs
+  /// towards flagging; the warning then says how to tell it M.
+  bool file_variance_as_known = false;
   std::string summary() const;  ///< the V_SUB line identify-frf prints
   std::string warning() const;  ///< empty unless misfit
 };
