@@ -225,22 +225,40 @@ int check(const std::string& json_path, const std::string& model_path, const std
   k.method = vo ? Method::VanOverschee1997 : Method::Akcay2011;
   k.extension = ext;
   k.reference_model = reference::result_to_json(res, vo, 40);
-  const StateSpace ref = model_from_json(k.reference_model, "reference model");  // decimal strings, correctly rounded
-  k.comparison = compare_models(candidate, ref);
+  StateSpace ref = model_from_json(k.reference_model, "reference model");  // decimal strings, correctly rounded
+  // compare_models forms spectra H Hᴴ and squared differences in double: a
+  // factor beyond 2^±128 (samples beyond 2^±256, which identify-spectrum
+  // scales the same way) overflows there — a user review's S × 1e200 read
+  // "spectrum -nan" and a zero outside the circle. Candidate, reference and
+  // perturbed references are then scaled alike by a power of two in B and D
+  // (exact), which every relative comparison leaves as it is.
+  const double factor_size = ref.D.cwiseAbs().maxCoeff();
+  const int k2 = std::isfinite(factor_size) && factor_size > 0 &&
+                         (factor_size > std::ldexp(1.0, 128) || factor_size < std::ldexp(1.0, -128))
+                     ? -std::ilogb(factor_size)
+                     : 0;
+  const auto rescaled = [k2](StateSpace g) {
+    g.B *= std::ldexp(1.0, k2);
+    g.D *= std::ldexp(1.0, k2);
+    return g;
+  };
+  ref = rescaled(ref);
+  const StateSpace compared = rescaled(candidate);
+  k.comparison = compare_models(compared, ref);
 
   // Default tolerance: what a correct double-precision implementation reaches on
   // these data, measured: the reference again, three times, with that
   // implementation's backward errors in random directions (workflow.hpp).
   std::vector<StateSpace> perturbed;
   for (const reference::Result& x : moved)
-    perturbed.push_back(model_from_json(reference::result_to_json(x, vo, 40), "perturbed reference model"));
+    perturbed.push_back(rescaled(model_from_json(reference::result_to_json(x, vo, 40), "perturbed reference model")));
   if (tolerance <= 0 && perturbed.empty())
     throw Error(ErrorKind::Numerical, data_path,
                 "the reference fails whenever these data are perturbed at rounding level, so no tolerance can be "
                 "measured; give --tolerance");
   set_oracle_tolerances(k, ref, perturbed, tolerance);
   if (!k.agree())
-    if (const std::string d = digits_note(candidate, ref, k.comparison.pole_distance,
+    if (const std::string d = digits_note(compared, ref, k.comparison.pole_distance,
                                           [&](const StateSpace& rounded) {
                                             OracleCheck alike = k;
                                             alike.comparison = compare_models(rounded, ref);

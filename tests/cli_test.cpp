@@ -649,6 +649,47 @@ TEST_F(Cli, CheckAcceptsASimilarityTransformOfTheTrueSystem) {
   EXPECT_EQ(run_fdsid({"check", "--model", model, "--data", data}).status, 0);
 }
 
+// A user review: a spectrum given × 1e200 came back from identify-spectrum
+// with a NaN Riccati residual and a wrong factor marked usable, and check read
+// "spectrum -nan". Both now scale such samples by a power of two (exact): the
+// factor is the unscaled one × 1e100 and the oracle agrees with it.
+TEST_F(Cli, ASpectrumOfSize1e200IsIdentifiedAndChecked) {
+  const std::string model = write("paper.json", paper_model_json(false));
+  const std::string data = path("hp.csv");
+  ASSERT_TRUE(Succeeded(run_fdsid({"sample-spectrum", "--model", model, "--M", "64", "--precision", "high", "--out", data})));
+  std::ifstream in(data);
+  std::string line, big;
+  std::getline(in, line);
+  big = line + "\n";
+  while (std::getline(in, line)) {  // omega_k,S_re,S_im: S scaled
+    std::stringstream ss(line);
+    std::string w, re, im;
+    std::getline(ss, w, ',');
+    std::getline(ss, re, ',');
+    std::getline(ss, im, ',');
+    char row[200];
+    std::snprintf(row, sizeof row, "%s,%.17g,%.17g\n", w.c_str(), std::stod(re) * 1e200, std::stod(im) * 1e200);
+    big += row;
+  }
+  const std::string scaled = write("big.csv", big);
+  const RunResult small = run_fdsid({"identify-spectrum", "--data", data, "--order", "4", "--json", "-"});
+  const RunResult r = run_fdsid({"identify-spectrum", "--data", scaled, "--order", "4", "--json", path("big.json")});
+  ASSERT_TRUE(Succeeded(small) && Succeeded(r)) << describe(r);
+  std::ifstream f(path("big.json"));
+  const json j = json::parse(f), j0 = json::parse(small.out);
+  EXPECT_TRUE(j.at("warnings").empty()) << j.at("warnings").dump();
+  EXPECT_LE(j.at("diagnostics").at("riccati_residual").get<double>(), 1e-8);
+  EXPECT_TRUE(j.at("diagnostics").at("usable").get<bool>());
+  // D = √(S scale) × the unscaled D, to the rounding of the samples × 1e200
+  // (u each, a perturbation no larger than the run's own backward error) and
+  // of each run: twice the run's relative error estimate (u × its condition).
+  const double D0 = j0.at("D")[0][0].get<double>(), bound = 2 * j0.at("diagnostics").at("error_estimate").get<double>();
+  EXPECT_NEAR(j.at("D")[0][0].get<double>() / 1e100, D0, bound * std::abs(D0));
+  const RunResult c = run_fdsid({"check", "--model", path("big.json"), "--data", scaled});
+  EXPECT_EQ(c.status, 0) << describe(c);
+  EXPECT_NE(c.out.find("AGREES"), std::string::npos) << c.out;
+}
+
 TEST_F(Cli, CheckRejectsAPoleMovedByOneTenThousandth) {
   const std::string model = write("paper.json", paper_model_json(false));
   const std::string data = path("hp.csv");

@@ -137,18 +137,27 @@ TEST(Akcay2011, InterpolatesMimoSystems) {
 TEST(Akcay2011, ResultScalesExactlyWithTheSpectrum) {
   // S -> c^2 S must give G -> c G with the same poles. With c a power of two every
   // operation scales exactly, so the results agree to the last bit up to the
-  // rounding of non-homogeneous steps; 64u relative covers those.
+  // rounding of non-homogeneous steps; 64u relative covers those. c = 2^±350
+  // puts |S| near 1e211 and 1e-211, where the Riccati step's quadratic terms
+  // overflow or underflow unless the samples are scaled first (a user review:
+  // S × 1e200 gave a NaN Riccati residual and a wrong factor, marked usable);
+  // identify_spectrum scales them by a power of two, so the same bound holds.
   const SpectrumData d = noise_free(akcay_example_system(), 128);
-  SpectrumData d2 = d;
-  const double c = 1024.0;
-  d2.S *= c * c;
   SpectrumOptions o;
   o.order = 4;
-  const SpectrumResult r1 = identify_spectrum(d, o), r2 = identify_spectrum(d2, o);
-  EXPECT_LE((r2.model.A - r1.model.A).norm(), 64 * kU * r1.model.A.norm());
-  EXPECT_LE((r2.model.D - c * r1.model.D).norm(), 64 * kU * c * r1.model.D.norm());
-  const cplx z = std::polar(1.0, 0.4);
-  EXPECT_LE((transfer(r2.model, z) - c * transfer(r1.model, z)).norm(), 64 * kU * c * transfer(r1.model, z).norm());
+  const SpectrumResult r1 = identify_spectrum(d, o);
+  for (const double c : {1024.0, std::ldexp(1.0, 350), std::ldexp(1.0, -350)}) {
+    SCOPED_TRACE(c);
+    SpectrumData d2 = d;
+    d2.S *= c * c;
+    const SpectrumResult r2 = identify_spectrum(d2, o);
+    EXPECT_LE((r2.model.A - r1.model.A).norm(), 64 * kU * r1.model.A.norm());
+    EXPECT_LE((r2.model.D - c * r1.model.D).norm(), 64 * kU * c * r1.model.D.norm());
+    const cplx z = std::polar(1.0, 0.4);
+    EXPECT_LE((transfer(r2.model, z) - c * transfer(r1.model, z)).norm(), 64 * kU * c * transfer(r1.model, z).norm());
+    EXPECT_LE(r2.riccati_residual, 1e-8);
+    EXPECT_TRUE(r2.warnings.empty()) << r2.warnings.front();
+  }
 }
 
 TEST(Akcay2011, ExtensionReadingsAgreeOnHermitianData) {

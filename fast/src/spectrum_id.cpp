@@ -892,7 +892,7 @@ void accuracy_warnings(SpectrumResult& res, int m) {
   if (n > 0 && res.split_margin < 1e-3)
     res.warnings.push_back("poles within " + fmt(res.split_margin, 3) +
                            " of the unit circle: the split of step 6 and the poles are ill-conditioned");
-  if (res.riccati_residual > numerics::RiccatiOptions().accept_residual)
+  if (!(res.riccati_residual <= numerics::RiccatiOptions().accept_residual))  // NaN too
     res.warnings.push_back("Riccati residual " + fmt(res.riccati_residual, 3) + " above 1e-8 (step 9)");
 }
 
@@ -924,7 +924,40 @@ Split step6_with_order_hint(const Eigen::MatrixXd& Atilde, int n, const Order& o
   }
 }
 
+namespace {
+// The algorithm is homogeneous in S: the factor of c S is √c times that of S
+// (B̂, D̂ scale by √c; Ê, F̂, P̂, the singular values and the fitted spectrum by
+// c; A, C, the order and every ratio not at all). Its quadratic quantities
+// (F̂ F̂ᵀ in the Riccati step, the residual's scale) overflow near |S| = 1e154
+// and underflow near 1e-154: a spectrum given ×1e200 came back with a NaN
+// Riccati residual and a wrong factor (a user review). Samples whose largest
+// modulus lies outside [2^-256, 2^256] are scaled by c = 4^-k into [1, 4):
+// a power of two, so the scaling itself rounds nothing (the results are those
+// of the unscaled samples in exact arithmetic times the powers above); inside
+// that range nothing is scaled, so every result there is as before.
+int spectrum_scale_exponent(const SpectrumData& data) {
+  const double top = data.S.cwiseAbs().maxCoeff();
+  if (!(top > 0) || !std::isfinite(top) || (top >= std::ldexp(1.0, -256) && top <= std::ldexp(1.0, 256))) return 0;
+  return std::ilogb(top) / 2;  // c = 4^-k brings top into [1, 4)
+}
+}  // namespace
+
 SpectrumResult identify_spectrum(const SpectrumData& data, const SpectrumOptions& opt) {
+  if (const int k = spectrum_scale_exponent(data); k != 0) {
+    SpectrumData scaled = data;
+    scaled.S *= std::ldexp(1.0, -2 * k);
+    if (scaled.variance.size()) scaled.variance *= std::ldexp(1.0, -4 * k);
+    SpectrumResult res = identify_spectrum(scaled, opt);
+    const double root = std::ldexp(1.0, k), c = std::ldexp(1.0, 2 * k);
+    res.model.B *= root;
+    res.model.D *= root;
+    res.summands.E *= c;
+    res.summands.F *= c;
+    res.summands.P *= c;
+    res.singular_values *= c;
+    res.min_spectrum *= c;
+    return res;
+  }
   const Dims d = check_input(data, opt);
   SpectrumResult res;
   res.method = opt.method;
