@@ -67,10 +67,19 @@ int run_table2(const Table2Command& given) {
     const std::string vo_l2 = r.vo_runs == 0                ? std::string("- (not run)")
                               : r.vo_failures == r.vo_runs ? std::string("- (none returned)")
                                                            : sci(r.vo_l2);
-    std::snprintf(line, sizeof line, "%7d   %.3e   %.3e   %5d      %d/%d (%d)   %s\n", r.M, r.l2, r.linf, r.failures,
-                  r.vo_failures, r.vo_runs, r.vo_split_failures, vo_l2.c_str());
+    if (std::isnan(r.l2))  // every realisation failed: no mean to print
+      std::snprintf(line, sizeof line, "%7d   %-9s   %-9s   %5d      %d/%d (%d)   %s\n", r.M, "-", "-", r.failures,
+                    r.vo_failures, r.vo_runs, r.vo_split_failures, vo_l2.c_str());
+    else
+      std::snprintf(line, sizeof line, "%7d   %.3e   %.3e   %5d      %d/%d (%d)   %s\n", r.M, r.l2, r.linf, r.failures,
+                    r.vo_failures, r.vo_runs, r.vo_split_failures, vo_l2.c_str());
     out << line;
   }
+  for (const auto& r : rows)
+    if (r.failures > 0)
+      out << "warning: M = " << r.M << ": Algorithm 1 failed in " << r.failures << " of " << o.realizations
+          << " realisations" << (std::isnan(r.l2) ? " (all: no mean)" : " (the means are over the others)")
+          << "; the first: " << r.first_failure << "\n";
   if (o.refine) {
     out << "refined (weighted NLS from each Algorithm 1 estimate):\n      M     mean L2       mean Linf    refinement failures\n";
     for (const auto& r : rows) {
@@ -129,7 +138,9 @@ void register_table2(CLI::App* reproduce, Action& chosen) {
       ->transform(choice(std::map<std::string, NoiseVariance>{{"unit-complex", NoiseVariance::UnitComplex},
                                                               {"unit-per-component", NoiseVariance::UnitPerComponent}},
                          "is not unit-complex or unit-per-component"));
-  t2->add_option("--vo-epsilon", o.vo_epsilon, "noise level of the vo1997 runs (paper: 1e-9; 0 skips them)")->capture_default_str();
+  t2->add_option("--vo-epsilon", o.vo_epsilon, "noise level of the vo1997 runs (paper: 1e-9; 0 skips them)")
+      ->check(finite_number(0, true))
+      ->capture_default_str();
   t2->add_flag("--refine", o.refine,
                "also refine each estimate by weighted nonlinear least squares (weights from the known noise filter) "
                "and report its errors (JSON l2_refined, linf_refined)");

@@ -772,6 +772,32 @@ TEST_F(Cli, Table2PrintsNoNanForVo1997WithoutAModel) {
   EXPECT_EQ(r.out.find("nan"), std::string::npos) << describe(r);
 }
 
+// A user review: M = 10 (N = 20 < p + r = 100) failed every realisation and
+// printed mean L2 0.000e+00, JSON l2 0.0, exit 0; --vo-epsilon -1 was taken.
+// Settings the samples cannot take are bad input now; a realisation that fails
+// is named with its cause, and a mean over none would be null, never 0.
+TEST_F(Cli, Table2RefusesSamplesTooShortAndNamesItsFailures) {
+  EXPECT_TRUE(IsBadInput(run_fdsid({"reproduce", "table2", "--realizations", "3", "--M", "10"}),
+                         {"--M 10", "p + r exceeds N", "give a larger --M"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"reproduce", "table2", "--vo-epsilon", "-1"}), {"--vo-epsilon"}));
+  // M = 64, seed 1: one of the three realisations has no stabilising Riccati
+  // solution at step 9 (the noise, eps = 1e-3, at M = 64 puts the fitted
+  // spectrum near zero); the means are over the other two.
+  const RunResult r =
+      run_fdsid({"reproduce", "table2", "--realizations", "3", "--M", "64", "--vo-epsilon", "0", "--json", "-"});
+  ASSERT_TRUE(Succeeded(r)) << describe(r);
+  const json row = json::parse(r.out).at("rows").at(0);
+  ASSERT_EQ(row.at("failures").get<int>(), 1) << row.dump();
+  EXPECT_NE(row.at("first_failure").get<std::string>().find("step 9"), std::string::npos) << row.dump();
+  EXPECT_GT(row.at("l2").get<double>(), 0.0);
+  EXPECT_TRUE(row.at("vo1997_l2_when_returned").is_null()) << row.dump();
+  const RunResult text = run_fdsid({"reproduce", "table2", "--realizations", "3", "--M", "64", "--vo-epsilon", "0"});
+  EXPECT_NE(text.out.find("warning: M = 64: Algorithm 1 failed in 1 of 3 realisations (the means are over the "
+                          "others); the first: step 9"),
+            std::string::npos)
+      << describe(text);
+}
+
 // Review finding 20: the README's first command (the bundled noisy spectrum,
 // order 4 read at sigma_8/sigma_9) ended in "a weak mode may have been left
 // out": the noise tail always sits above the rounding estimate. It has no

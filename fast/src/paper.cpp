@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <random>
+#include <mutex>
 #include <thread>
 
 #include <boost/random/normal_distribution.hpp>
@@ -131,6 +132,8 @@ std::vector<Table2Row> reproduce_table2(const Table2Options& o) {
     // Up to the constant E|v|² (2 for unit-per-component), which does not move the optimum.
     const Eigen::VectorXd variance = akcay_noise_variance(M, o.epsilon);
     std::atomic<int> next{0};
+    std::mutex first_error_mutex;
+    std::string input_error, first_failure;  // the first bad-input error; the first failure's message
     SpectrumOptions so;
     so.order = o.order;
     so.p = o.p;
@@ -151,7 +154,11 @@ std::vector<Table2Row> reproduce_table2(const Table2Options& o) {
               l2_ref[i] = linf_ref[i] = NAN;
             }
           }
-        } catch (const Error&) {
+        } catch (const Error& e) {
+          const std::lock_guard<std::mutex> lock(first_error_mutex);
+          if ((e.kind() == ErrorKind::Input || e.kind() == ErrorKind::Dimension) && input_error.empty())
+            input_error = e.what();
+          if (first_failure.empty()) first_failure = e.what();
         }
         if (o.vo_epsilon > 0) {
           SpectrumOptions vo = so;
@@ -172,9 +179,15 @@ std::vector<Table2Row> reproduce_table2(const Table2Options& o) {
     for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
     worker();
     for (auto& t : pool) t.join();
+    // Settings these samples cannot take (p + r > N = 2M): every realisation
+    // fails alike, so it is bad input, not a result (a user review: M = 10
+    // printed mean L2 0.000e+00 with 3/3 failures, exit 0).
+    if (!input_error.empty())
+      throw Error(ErrorKind::Input, "--M " + std::to_string(M), input_error + "; give a larger --M");
 
     Table2Row row;
     row.M = M;
+    row.first_failure = first_failure;
     for (int i = 0; i < o.realizations; ++i) {
       if (std::isnan(l2[i])) {
         ++row.failures;
@@ -196,8 +209,9 @@ std::vector<Table2Row> reproduce_table2(const Table2Options& o) {
       row.l2_refined_sd = sample_sd(row.l2_refined_all);
       row.linf_refined_sd = sample_sd(row.linf_refined_all);
     }
-    row.l2 = mean(row.l2_all);
-    row.linf = mean(row.linf_all);
+    // No realisation returned a model: no mean (NaN, JSON null), never 0.
+    row.l2 = row.l2_all.empty() ? NAN : mean(row.l2_all);
+    row.linf = row.linf_all.empty() ? NAN : mean(row.linf_all);
     row.l2_sd = sample_sd(row.l2_all);
     row.linf_sd = sample_sd(row.linf_all);
     if (o.vo_epsilon > 0) {
