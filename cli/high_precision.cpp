@@ -1,6 +1,7 @@
 #include "high_precision.hpp"
 #include "reference_runs.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -166,9 +167,25 @@ int check(const std::string& json_path, const std::string& model_path, const std
                 "discrete-time: give the discrete model (\"domain\": \"discrete\"), or check an FRF model with --frf "
                 "or --data --meta");
   int p = int_field(cj, "p", model_path), r = int_field(cj, "r", model_path);
-  const bool vo = cj.contains("method") && cj["method"] == "vo1997";
-  const Extension ext =
-      cj.contains("extension") && cj["extension"] == "conjugate" ? Extension::Conjugate : Extension::HermitianPart;
+  // A method or extension given must be one the reference runs: a typo read
+  // as the default turned a correct candidate into DISAGREES with no hint (a
+  // user review: "extension": "conjugat").
+  const auto spectrum_setting = [&](const char* key, const std::vector<std::string>& allowed,
+                                    const std::string& frf_hint) -> std::string {
+    if (!cj.contains(key)) return "";
+    const std::string v = cj[key].is_string() ? cj[key].get<std::string>() : cj[key].dump();
+    if (std::find(allowed.begin(), allowed.end(), v) != allowed.end()) return v;
+    std::string list;
+    for (size_t i = 0; i < allowed.size(); ++i) list += (i ? i + 1 == allowed.size() ? " or " : ", " : "") + allowed[i];
+    throw Error(ErrorKind::Input, model_path + " field \"" + key + "\"",
+                "\"" + v + "\" is not " + list + (v.rfind("pintelon2002", 0) == 0 ? frf_hint : std::string()));
+  };
+  const bool vo = spectrum_setting("method", {"akcay2011", "vo1997"},
+                                   ": an FRF model; check it with --frf FRF.csv or --data RECORDS.csv --meta") ==
+                  "vo1997";
+  const Extension ext = spectrum_setting("extension", {"hermitian-part", "conjugate"}, "") == "conjugate"
+                            ? Extension::Conjugate
+                            : Extension::HermitianPart;
   if (candidate.order() < 1) throw Error(ErrorKind::Input, model_path, "candidate has order 0");
 
   int m = 0, M = 0;

@@ -798,6 +798,23 @@ TEST_F(Cli, Table2RefusesSamplesTooShortAndNamesItsFailures) {
       << describe(text);
 }
 
+// A user review: a spectral factor's "method" or "extension" that the
+// reference does not know was read as the default ("conjugat" made a correct
+// candidate DISAGREE, "foo" passed): bad input, named, before any reference run.
+TEST_F(Cli, CheckRefusesAnUnknownMethodOrExtension) {
+  json cand = json::parse(paper_model_json(false));
+  const std::string data = std::string(FDSID_SOURCE_DIR) + "/data/akcay2011_M1000_eps1e-3.csv";
+  for (const auto& [key, value, said] :
+       {std::tuple<std::string, std::string, std::string>{"extension", "conjugat", "is not hermitian-part or conjugate"},
+        {"method", "foo", "is not akcay2011 or vo1997"},
+        {"method", "pintelon2002-alg1", "an FRF model; check it with --frf"}}) {
+    json c = cand;
+    c[key] = value;
+    const std::string file = write("cand_" + value + ".json", c.dump());
+    EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", file, "--data", data}), {"field \"" + key + "\"", said}));
+  }
+}
+
 // Review finding 20: the README's first command (the bundled noisy spectrum,
 // order 4 read at sigma_8/sigma_9) ended in "a weak mode may have been left
 // out": the noise tail always sits above the rounding estimate. It has no
