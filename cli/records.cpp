@@ -4,7 +4,9 @@
 // identified from (the NRMSE fit of MATLAB's compare).
 #include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "common.hpp"
 #include "fdsid/error.hpp"
@@ -27,6 +29,8 @@ struct FrfCommand {
 int run_frf(const FrfCommand& c) {
   refuse_overwrite(c.out_path, {c.data_path, c.meta_path}, "--out");
   refuse_overwrite(c.json_path, {c.data_path, c.meta_path, c.out_path}, "--json");
+  if (c.json_path == "-" && c.out_path == "-")
+    throw Error(ErrorKind::Input, "--json", "- (stdout) needs --out FILE: the CSV goes to stdout otherwise");
   const Records rec = read_records(c.data_path, c.meta_path, c.selection);
   if (rec.inputs != 1 || rec.samples.cols() != 2)
     throw Error(ErrorKind::Input, c.data_path,
@@ -40,10 +44,12 @@ int run_frf(const FrfCommand& c) {
     throw e.within(c.data_path + " with " + c.meta_path);
   }
   write_text_file(c.out_path, frf_csv(frf));
-  Out out{c.json_path == "-"};
+  // With the CSV on stdout (--out -) the summary goes to stderr: on stdout
+  // it followed the rows, and identify-frf refused the file (a user review).
+  std::ostringstream out;
   // The command that identifies from the file (summary and JSON "identify").
   const std::string identify =
-      "identify-frf --frf " + c.out_path + (c.domain == Domain::Continuous ? " --domain continuous" : "") +
+      "identify-frf --frf " + (c.out_path == "-" ? std::string("FILE") : c.out_path) + (c.domain == Domain::Continuous ? " --domain continuous" : "") +
       (rec.meta.periods >= 4 ? " --frf-periods " + std::to_string(rec.meta.periods) : std::string());
   out << "wrote " << c.out_path << ": G = Y/U and G_var at " << frf.frequencies() << " excited lines from M = "
       << rec.meta.periods << " periods (omega in " << (c.domain == Domain::Discrete ? "rad/sample" : "rad/s")
@@ -55,6 +61,7 @@ int run_frf(const FrfCommand& c) {
     out << "warning: G_var is a sample variance over only M = " << rec.meta.periods
         << " periods: identify-frf --frf reads it as a known variance and judges the fit by that law, which is far "
            "off at this M (identify-frf needs M >= 4 for the sample law: use more periods)\n";
+  if (c.json_path != "-") (c.out_path == "-" ? std::cerr : std::cout) << out.str();
   emit_json(c.json_path, {{"data", c.data_path},
                           {"meta", c.meta_path},
                           {"out", c.out_path},

@@ -983,6 +983,23 @@ TEST_F(CliFrf, AnFrfFromRecordsIsJudgedByTheSampleVarianceLawWithFrfPeriods) {
       << short_frf.out;
 }
 
+// A user review: frf --out - put its summary on stdout after the CSV rows, so
+// identify-frf refused the file ("line 130: has 1 fields"), and --json -
+// appended the JSON too. The summary goes to stderr then; --json - needs a file.
+TEST_F(CliFrf, AnFrfOnStdoutIsACsvIdentifyFrfReads) {
+  const std::string src = std::string(FDSID_SOURCE_DIR) + "/data/pintelon2002_P512_M8";
+  const RunResult r = run_fdsid({"frf", "--data", src + ".csv", "--meta", src + ".meta.json", "--out", "-"});
+  ASSERT_TRUE(Succeeded(r)) << describe(r);
+  EXPECT_EQ(r.out.find("wrote"), std::string::npos) << r.out.substr(r.out.size() - 300);
+  EXPECT_NE(r.err.find("identify-frf --frf FILE --frf-periods 8"), std::string::npos) << r.err;
+  const RunResult id =
+      run_fdsid({"identify-frf", "--frf", write("stdout.csv", r.out), "--frf-periods", "8", "--order", "4"});
+  EXPECT_TRUE(Succeeded(id)) << describe(id);
+  EXPECT_TRUE(IsBadInput(
+      run_fdsid({"frf", "--data", src + ".csv", "--meta", src + ".meta.json", "--out", "-", "--json", "-"}),
+      {"--json", "needs --out FILE"}));
+}
+
 // Review finding 9: simulate-records wrote a meta identify-frf refuses (a line
 // listed twice) and the non-causal periodic "steady state" of an unstable model.
 TEST_F(CliFrf, SimulateRecordsRefusesWhatIdentifyFrfWouldRefuse) {
