@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <random>
-#include <mutex>
 #include <thread>
 
 #include <boost/random/normal_distribution.hpp>
@@ -132,8 +131,8 @@ std::vector<Table2Row> reproduce_table2(const Table2Options& o) {
     // Up to the constant E|v|² (2 for unit-per-component), which does not move the optimum.
     const Eigen::VectorXd variance = akcay_noise_variance(M, o.epsilon);
     std::atomic<int> next{0};
-    std::mutex first_error_mutex;
-    std::string input_error, first_failure;  // the first bad-input error; the first failure's message
+    std::vector<std::string> failure(o.realizations);  // Algorithm 1's error per realisation ("" when none)
+    std::vector<char> bad_input(o.realizations, 0);     // that error says the settings do not fit the samples
     SpectrumOptions so;
     so.order = o.order;
     so.p = o.p;
@@ -155,10 +154,8 @@ std::vector<Table2Row> reproduce_table2(const Table2Options& o) {
             }
           }
         } catch (const Error& e) {
-          const std::lock_guard<std::mutex> lock(first_error_mutex);
-          if ((e.kind() == ErrorKind::Input || e.kind() == ErrorKind::Dimension) && input_error.empty())
-            input_error = e.what();
-          if (first_failure.empty()) first_failure = e.what();
+          failure[i] = e.what();
+          bad_input[i] = e.kind() == ErrorKind::Input || e.kind() == ErrorKind::Dimension;
         }
         if (o.vo_epsilon > 0) {
           SpectrumOptions vo = so;
@@ -182,12 +179,13 @@ std::vector<Table2Row> reproduce_table2(const Table2Options& o) {
     // Settings these samples cannot take (p + r > N = 2M): every realisation
     // fails alike, so it is bad input, not a result (a user review: M = 10
     // printed mean L2 0.000e+00 with 3/3 failures, exit 0).
-    if (!input_error.empty())
-      throw Error(ErrorKind::Input, "--M " + std::to_string(M), input_error + "; give a larger --M");
+    // The lowest realisation's error, so that the message does not depend on the threads' timing.
+    for (int i = 0; i < o.realizations; ++i)
+      if (bad_input[i]) throw Error(ErrorKind::Input, "--M " + std::to_string(M), failure[i] + "; give a larger --M");
 
     Table2Row row;
     row.M = M;
-    row.first_failure = first_failure;
+    for (int i = 0; i < o.realizations && row.first_failure.empty(); ++i) row.first_failure = failure[i];
     for (int i = 0; i < o.realizations; ++i) {
       if (std::isnan(l2[i])) {
         ++row.failures;

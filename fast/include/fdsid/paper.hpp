@@ -71,7 +71,7 @@ struct Table2Row {
   double l2 = 0, linf = 0;        ///< means over the successful realisations
   double l2_sd = 0, linf_sd = 0;  ///< sample standard deviations
   int failures = 0;               ///< realisations where Algorithm 1 failed
-  std::string first_failure;      ///< the first failure's message ("" when none)
+  std::string first_failure;      ///< the lowest-numbered failed realisation's message ("" when none)
   int vo_runs = 0, vo_failures = 0;
   int vo_split_failures = 0;  ///< of which at step 6, as the paper reports
   double vo_l2 = 0;           ///< mean L2 error of the vo1997 runs that returned a model
