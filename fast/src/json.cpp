@@ -107,13 +107,13 @@ json to_json(const std::vector<Table2Row>& rows, const Table2Options& o) {
     j["rows"].push_back({{"M", r.M},
                          {"l2", number_or_null(r.l2)},  // null: no realisation returned a model
                          {"linf", number_or_null(r.linf)},
-                         {"l2_sd", std::isnan(r.l2) ? json(nullptr) : json(r.l2_sd)},
-                         {"linf_sd", std::isnan(r.l2) ? json(nullptr) : json(r.linf_sd)},
+                         {"l2_sd", number_or_null(r.l2_sd)},
+                         {"linf_sd", number_or_null(r.linf_sd)},
                          {"failures", r.failures},
                          {"vo1997_runs", r.vo_runs},
                          {"vo1997_failures", r.vo_failures},
                          {"vo1997_step6_failures", r.vo_split_failures},
-                         {"vo1997_l2_when_returned", r.vo_runs == 0 ? json(nullptr) : number_or_null(r.vo_l2)}});
+                         {"vo1997_l2_when_returned", number_or_null(r.vo_l2)}});
     if (!r.first_failure.empty()) j["rows"].back()["first_failure"] = r.first_failure;
     if (o.refine) {
       json& row = j["rows"].back();

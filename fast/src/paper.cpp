@@ -210,8 +210,8 @@ std::vector<Table2Row> reproduce_table2(const Table2Options& o) {
     // No realisation returned a model: no mean (NaN, JSON null), never 0.
     row.l2 = row.l2_all.empty() ? NAN : mean(row.l2_all);
     row.linf = row.linf_all.empty() ? NAN : mean(row.linf_all);
-    row.l2_sd = sample_sd(row.l2_all);
-    row.linf_sd = sample_sd(row.linf_all);
+    row.l2_sd = row.l2_all.empty() ? NAN : sample_sd(row.l2_all);
+    row.linf_sd = row.linf_all.empty() ? NAN : sample_sd(row.linf_all);
     if (o.vo_epsilon > 0) {
       row.vo_runs = o.realizations;
       row.vo_split_failures = static_cast<int>(std::count(vo_failed.begin(), vo_failed.end(), 1));

@@ -69,12 +69,12 @@ struct Table2Options {
 struct Table2Row {
   int M = 0;
   double l2 = 0, linf = 0;        ///< means over the successful realisations
-  double l2_sd = 0, linf_sd = 0;  ///< sample standard deviations
+  double l2_sd = 0, linf_sd = 0;  ///< sample standard deviations (NaN when no realisation returned a model)
   int failures = 0;               ///< realisations where Algorithm 1 failed
   std::string first_failure;      ///< the lowest-numbered failed realisation's message ("" when none)
   int vo_runs = 0, vo_failures = 0;
   int vo_split_failures = 0;  ///< of which at step 6, as the paper reports
-  double vo_l2 = 0;           ///< mean L2 error of the vo1997 runs that returned a model
+  double vo_l2 = NAN;         ///< mean L2 error of the vo1997 runs that returned a model (NaN: none, or not run)
   std::vector<double> l2_all, linf_all;
   /// With options.refine: the refined estimates' errors over the realisations
   /// where Algorithm 1 and the refinement both returned a model (NaN without).
