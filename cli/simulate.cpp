@@ -1,5 +1,6 @@
 // fdsid simulate-records: a periodic multisine experiment on a model.
 #include <algorithm>
+#include <cmath>
 #include <memory>
 
 #include "common.hpp"
@@ -30,6 +31,18 @@ int run(const SimulateRecordsCommand& c) {
   const StateSpace& model = file.model;
   RecordMeta meta;
   const Eigen::MatrixXd rec = simulate_periodic_record(model, c.options, meta);
+  // Finite options can still overflow (a user review: --rms 1e300 was taken
+  // and identify-frf then blamed the file's lines). The readers square the
+  // samples (the periods' sample variances) and sum up to 1e8 of them, so
+  // every sample must stay below 2^495: 2^990 x 1e8 (< 2^27) < 2^1024.
+  const double largest = rec.allFinite() ? rec.cwiseAbs().maxCoeff() : INFINITY;
+  if (!(largest < std::ldexp(1.0, 495)))
+    throw Error(ErrorKind::Input, "--rms",
+                "the simulated record reaches " + fmt(largest, 3) + " (input RMS " + fmt(c.options.rms, 3) +
+                    ", output noise " + fmt(c.options.output_noise_std, 3) + ", input noise " +
+                    fmt(c.options.input_noise_std, 3) +
+                    ", times the model's gain), beyond 2^495 = 1e149 whose squares the periods' variances sum; "
+                    "give smaller levels");
   // A resonance of the model outside the excited lines (review finding 29:
   // the default lines stop below P/4 and the Pintelon plant resonates at
   // 0.379 cycles/sample): the records will not determine it.
@@ -82,9 +95,13 @@ void register_simulate_records(CLI::App& app, Action& chosen) {
   sim->add_option("--lines", rec.lines,
                   "excited DFT lines, 1-based k = 1 ... P/2 at k/(P Ts) Hz (default: odd lines below P/4, i.e. up to "
                   "0.25 cycles/sample; a warning names a resonance of the model outside them)");
-  sim->add_option("--rms", rec.rms, "input RMS")->capture_default_str();
-  sim->add_option("--noise-std", rec.output_noise_std, "white output noise std")->capture_default_str();
-  sim->add_option("--input-noise-std", rec.input_noise_std, "white input measurement noise std")->capture_default_str();
+  sim->add_option("--rms", rec.rms, "input RMS")->check(finite_number(0, false))->capture_default_str();
+  sim->add_option("--noise-std", rec.output_noise_std, "white output noise std")
+      ->check(finite_number(0, true))
+      ->capture_default_str();
+  sim->add_option("--input-noise-std", rec.input_noise_std, "white input measurement noise std")
+      ->check(finite_number(0, true))
+      ->capture_default_str();
   sim->add_option("--seed", rec.seed, "random seed")->capture_default_str();
   on_parsed(sim, c, chosen, run);
 }

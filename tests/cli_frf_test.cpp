@@ -2003,3 +2003,27 @@ TEST_F(CliFrf, UnstablePolesAreReflectedUnlessAllowed) {
   const RunResult c = run_fdsid({"check", "--model", path("a.json"), "--frf", f}, 600);
   EXPECT_EQ(c.status, 0) << describe(c);
 }
+
+// A user review: simulate-records took --noise-std inf and --rms 1e300 (exit
+// 0; the overflowed record then made identify-frf blame the file's lines) and
+// refused --noise-std -0.1 without naming the option. Each is bad input naming
+// its option, and no file is written.
+TEST_F(CliFrf, SimulateRecordsRefusesLevelsThatAreNotFiniteOrOverflow) {
+  const std::string model = write("model.json", kPintelonModel);
+  const auto simulate = [&](const std::string& option, const std::string& value) {
+    return run_fdsid({"simulate-records", "--model", model, "--out", path("big.csv"), "--meta-out",
+                      path("big.meta.json"), "--period", "64", "--periods", "2", option, value});
+  };
+  for (const std::string v : {"inf", "nan", "-0.1"}) {
+    EXPECT_TRUE(IsBadInput(simulate("--noise-std", v), {"--noise-std", v}));
+    EXPECT_TRUE(IsBadInput(simulate("--input-noise-std", v), {"--input-noise-std", v}));
+  }
+  for (const std::string v : {"inf", "0", "-1"}) EXPECT_TRUE(IsBadInput(simulate("--rms", v), {"--rms", v}));
+  // Finite but too large: the record's samples would pass 2^495, whose squares
+  // the readers' period variances sum (cli/simulate.cpp).
+  EXPECT_TRUE(IsBadInput(simulate("--rms", "1e300"), {"--rms", "beyond 2^495"}));
+  EXPECT_FALSE(std::filesystem::exists(path("big.csv")));
+  EXPECT_FALSE(std::filesystem::exists(path("big.meta.json")));
+  // A level well inside the range is taken.
+  EXPECT_TRUE(Succeeded(simulate("--rms", "1e100")));
+}
