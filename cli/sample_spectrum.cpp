@@ -1,5 +1,6 @@
 // fdsid sample-spectrum: a model's power spectrum on the uniform grid, as CSV.
 #include <cmath>
+#include <iostream>
 #include <memory>
 #include <sstream>
 
@@ -67,10 +68,25 @@ int run(const SampleSpectrumCommand& c) {
     if (d.m != 1) throw Error(ErrorKind::Input, "--epsilon", "the Section 4 noise model is scalar");
     d = akcay_noisy_samples(d.S, c.M, c.epsilon, NoiseVariance::UnitComplex, c.seed);
   }
+  // Noise larger than the spectrum makes samples no power spectrum can have
+  // (a user review: --epsilon 10 wrote them silently and identify-spectrum
+  // then failed at step 6 without naming them).
+  std::vector<std::string> warnings;
+  if (c.epsilon > 0) {
+    const long negative = (d.S.row(0).real().array() < 0).count();
+    if (negative > 0)
+      warnings.push_back(std::to_string(negative) + " of " + std::to_string(c.M + 1) +
+                         " noisy samples have a negative real part (the noise at --epsilon " + fmt(c.epsilon, 3) +
+                         " exceeds the spectrum there): no power spectrum has them, and identify-spectrum may find "
+                         "no positive-real factor");
+  }
+  for (const std::string& w : warnings) std::cerr << "warning: " << w << "\n";
   std::ostringstream s;
   write_spectrum_csv(s, d);
   write_text_file(c.out_path, s.str());
-  emit_json(c.json_path, summary(c, d.m));
+  nlohmann::json j = summary(c, d.m);
+  j["warnings"] = warnings;
+  emit_json(c.json_path, j);
   return 0;
 }
 

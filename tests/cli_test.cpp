@@ -545,6 +545,36 @@ TEST_F(Cli, SampleEpsilonMustBeFiniteAndNonNegative) {
   }
 }
 
+// A user review: --epsilon 10 wrote samples with a negative real part
+// silently (identify-spectrum then failed). The warning counts exactly the
+// samples the file holds below zero. At --epsilon 1e-6 none can be: the
+// noise's real part has std eps |H|/sqrt(2) <= 8.7e-7 (max |H| on the circle
+// 1.219, paper.cpp's akcay_noise_filter), and the paper's spectrum is at least
+// 1.03e-4 on the grid M = 64, over 100 std away.
+TEST_F(Cli, NoisySamplesBelowZeroAreWarnedAndCounted) {
+  const auto sample = [&](const std::string& eps) {
+    return run_fdsid({"sample-spectrum", "--model", kPaperModel, "--M", "64", "--epsilon", eps, "--out",
+                      path("n.csv"), "--json", "-"});
+  };
+  const RunResult loud = sample("10");
+  ASSERT_TRUE(Succeeded(loud));
+  std::ifstream f(path("n.csv"));
+  std::string line;
+  std::getline(f, line);
+  int negative = 0;
+  while (std::getline(f, line)) negative += std::stod(line.substr(line.find(',') + 1)) < 0;
+  ASSERT_GT(negative, 0);
+  const auto warnings = nlohmann::json::parse(loud.out)["warnings"];
+  ASSERT_EQ(warnings.size(), 1u) << loud.out;
+  EXPECT_EQ(warnings[0].get<std::string>().rfind(std::to_string(negative) + " of 65 noisy samples", 0), 0u)
+      << warnings[0];
+  EXPECT_NE(loud.err.find("warning: " + std::to_string(negative) + " of 65"), std::string::npos) << loud.err;
+  const RunResult quiet = sample("1e-6");
+  ASSERT_TRUE(Succeeded(quiet));
+  EXPECT_TRUE(nlohmann::json::parse(quiet.out)["warnings"].empty()) << quiet.out;
+  EXPECT_EQ(quiet.err, "");
+}
+
 // `sample-spectrum --M 2147483647`: M + 1 overflows int (UBSan: fast/src/model.cpp:92
 // "signed integer overflow"); the release build reports "internal error: std::bad_alloc"
 // without naming --M.
