@@ -55,7 +55,12 @@ TEST(ModelJson, RejectsMalformedModels) {
       // Review finding 10: a model without domain or sample time was taken as discrete with Ts = 1.
       {R"({"sample_time":1,"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]]})", "field \"domain\": is missing"},
       {R"({"domain":"discrete","A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]]})", "field \"sample_time\": is missing"},
-      {R"([1,2])", "JSON object"}};
+      {R"([1,2])", "JSON object"},
+      // A user review: "order": 3 beside a 4-state A was accepted silently.
+      {R"({"domain":"discrete","sample_time":1,"order":2,"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]]})",
+       "field \"order\": is 2 but A has 1 rows"},
+      {R"({"domain":"discrete","sample_time":1,"order":"1","A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]]})",
+       "not a whole number"}};
   for (const auto& c : bad) {
     try {
       model_from_json(nlohmann::json::parse(c.text), "m.json");
@@ -64,6 +69,13 @@ TEST(ModelJson, RejectsMalformedModels) {
       EXPECT_NE(std::string(e.what()).find(c.names), std::string::npos) << c.text << " -> " << e.what();
     }
   }
+}
+
+TEST(ModelJson, AnOrderThatMatchesAIsTaken) {
+  EXPECT_EQ(model_from_json(nlohmann::json::parse(
+                                R"({"domain":"discrete","sample_time":1,"order":1,"A":[[0.5]],"B":[[1]],"C":[[1]],"D":[[1]]})"))
+                .order(),
+            1);
 }
 
 TEST(ModelJson, AContinuousModelNeedsNoSampleTime) {

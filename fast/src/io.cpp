@@ -212,6 +212,18 @@ StateSpace model_from_json(const nlohmann::json& j, const std::string& where) {
     m.C.resize(m.D.rows(), 0);
   }
   validate(m, where);
+  // fdsid writes the order beside A; a file whose "order" disagrees with A
+  // was edited by hand or written by a tool that mixed two models (a user
+  // review: "order": 3 on a 4-state A was accepted silently).
+  if (j.contains("order")) {
+    const nlohmann::json& o = j["order"];
+    const std::string rows = std::to_string(m.A.rows());
+    if (!o.is_number_integer())
+      input_error(where + " field \"order\"", "is " + o.dump() + ", not a whole number (the size of A: " + rows + ")");
+    if (o.get<long long>() != m.A.rows())
+      input_error(where + " field \"order\"",
+                  "is " + o.dump() + " but A has " + rows + " rows: the order is the size of A; correct \"order\" or remove it");
+  }
   return m;
 }
 
