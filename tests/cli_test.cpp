@@ -828,6 +828,40 @@ TEST_F(Cli, Table2RefusesSamplesTooShortAndNamesItsFailures) {
       << describe(text);
 }
 
+// A user review: fig1 --F 50 exited "fewer than 2 runs succeeded" with no
+// cause, and with part of the runs failing the ratios over the survivors
+// printed without a warning. Lines that cannot hold r basis functions (F < r)
+// fail every run alike: bad input. An input whose squares underflow
+// (|U| = 1e-200) fails every run at step 1b: the cause is the first run's. At
+// F = 60 lines (5.9 % of [0, pi]) C_Y's r = 8 powers of z are so nearly
+// dependent that its Cholesky factorisation fails in some runs and not others
+// (measured: 42 of 100).
+TEST_F(Cli, Fig1NamesWhyItsRunsFailed) {
+  EXPECT_TRUE(IsBadInput(run_fdsid({"reproduce", "fig1", "--runs", "20", "--F", "20", "--r", "100"}),
+                         {"--F 20 --r 100", "real columns of Z are fewer", "give a larger --F or a smaller --r"}));
+  EXPECT_TRUE(IsBadInput(run_fdsid({"reproduce", "fig1", "--runs", "20", "--input-level", "1e-200"}),
+                         {"fewer than 2 runs succeeded (20 failed", "the first, run 0: step 1b", "underflow"}));
+  const RunResult r = run_fdsid({"reproduce", "fig1", "--runs", "100", "--F", "60", "--M", "4", "--json", "-"});
+  ASSERT_TRUE(Succeeded(r)) << describe(r);
+  const json j = json::parse(r.out);
+  const int failed = j.at("failures").get<int>();
+  ASSERT_GT(failed, 0) << r.out.substr(0, 300);
+  ASSERT_LT(failed, 100) << r.out.substr(0, 300);
+  EXPECT_EQ(j.at("runs").get<int>() + failed, 100);
+  EXPECT_EQ(j.at("first_failure").get<std::string>().rfind("run ", 0), 0u) << j.at("first_failure");
+  const RunResult text = run_fdsid({"reproduce", "fig1", "--runs", "100", "--F", "60", "--M", "4"});
+  EXPECT_NE(text.out.find("warning: " + std::to_string(failed) + " of 100 runs failed (the curves are over the " +
+                          std::to_string(100 - failed) + " others"),
+            std::string::npos)
+      << describe(text);
+  // All runs succeed at the paper's F = 999: no warning, first_failure null.
+  const RunResult paper = run_fdsid({"reproduce", "fig1", "--runs", "20", "--json", path("paper.json")});
+  ASSERT_TRUE(Succeeded(paper)) << describe(paper);
+  std::ifstream pj(path("paper.json"));
+  EXPECT_TRUE(json::parse(pj).at("first_failure").is_null());
+  EXPECT_EQ(paper.out.find("warning"), std::string::npos) << paper.out;
+}
+
 // A user review: a spectral factor's "method" or "extension" that the
 // reference does not know was read as the default ("conjugat" made a correct
 // candidate DISAGREE, "foo" passed): bad input, named, before any reference run.

@@ -146,7 +146,8 @@ json to_json(const FigureResult& res, int figure, const FigureOptions& o) {
           {"seed", o.seed},
           {"std_subspace", vec(res.std_subspace)},
           {"std_sample_subspace", vec(res.std_sample)},
-          {"std_known_alpha", vec(res.std_known_alpha)}};
+          {"std_known_alpha", vec(res.std_known_alpha)},
+          {"first_failure", res.first_failure.empty() ? json(nullptr) : json(res.first_failure)}};
 }
 
 json to_json(const GapReport& report) { return gap_report_to_json(report); }

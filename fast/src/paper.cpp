@@ -262,6 +262,9 @@ struct FigureSums {
   Eigen::VectorXcd s[3];
   Eigen::VectorXd s2[3];
   int runs = 0, failures = 0;
+  int first_failed_run = -1;  ///< the lowest-numbered failed run of these sums (-1: none)
+  std::string first_failure;  ///< its error
+  ErrorKind first_failure_kind = ErrorKind::Numerical;
   explicit FigureSums(int F) {
     for (int e = 0; e < 3; ++e) {
       s[e] = Eigen::VectorXcd::Zero(F);
@@ -366,8 +369,13 @@ void figure_run(const FigureOptions& o, const FigureSetup& su, int i, std::vecto
       acc.s2[e] += g[e].cwiseAbs2();
     }
     ++acc.runs;
-  } catch (const Error&) {
-    ++acc.failures;
+  } catch (const Error& e) {
+    // Runs within one block go in increasing order: the first kept is the lowest.
+    if (acc.failures++ == 0) {
+      acc.first_failed_run = i;
+      acc.first_failure = e.what();
+      acc.first_failure_kind = e.kind();
+    }
   }
 }
 
@@ -405,6 +413,11 @@ FigureSums figure_monte_carlo(const FigureOptions& o, const FigureSetup& su) {
     }
     total.runs += b.runs;
     total.failures += b.failures;
+    if (total.first_failed_run < 0 && b.first_failed_run >= 0) {  // blocks in order: the lowest run
+      total.first_failed_run = b.first_failed_run;
+      total.first_failure = b.first_failure;
+      total.first_failure_kind = b.first_failure_kind;
+    }
   }
   return total;
 }
@@ -420,9 +433,17 @@ FigureResult figure_statistics(const FigureOptions& o, const FigureSetup& su, co
   FigureResult res;
   res.runs = total.runs;
   res.failures = total.failures;
+  // Settings the lines cannot take (fewer columns of Z than rows: F < r for
+  // this SISO plant) fail every run alike: bad input, not a result.
+  if (total.failures > 0 && total.first_failure_kind == ErrorKind::Dimension)
+    throw Error(ErrorKind::Input, "--F " + std::to_string(F) + " --r " + std::to_string(o.r),
+                total.first_failure + "; give a larger --F or a smaller --r");
+  if (total.failures > 0)
+    res.first_failure = "run " + std::to_string(total.first_failed_run) + ": " + total.first_failure;
   if (total.runs < 2)
-    throw Error(ErrorKind::Numerical, "Monte Carlo", "fewer than 2 runs succeeded (" + std::to_string(total.failures) +
-                                                         " failed)");
+    throw Error(ErrorKind::Numerical, "Monte Carlo",
+                "fewer than 2 runs succeeded (" + std::to_string(total.failures) + " failed; the first, " +
+                    res.first_failure + ")");
   const double R = total.runs;
   Eigen::VectorXd sd[3];
   Eigen::VectorXcd mean[3];

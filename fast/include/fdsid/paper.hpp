@@ -136,6 +136,7 @@ struct FigureResult {
   Eigen::VectorXcd truth, mean_subspace, mean_sample;
   int runs = 0;                   ///< successful runs (all three estimates returned)
   int failures = 0;
+  std::string first_failure;      ///< "run i: <error>" of the lowest-numbered failed run ("" when none)
 };
 
 /// Section 6.1's Monte Carlo: per run, M experiments Y^[l] = G₀ U + N^[l]
