@@ -512,11 +512,14 @@ void read_selection(const json& src, const FrfCheckRequest& q, RecordSettings& s
   if (q.selection.empty()) {
     s.selection = json_sel;
   } else {
-    if (!json_sel.empty() && (json_sel.inputs != q.selection.inputs || json_sel.outputs != q.selection.outputs ||
-                              json_sel.skip_periods != q.selection.skip_periods ||
-                              json_sel.use_periods != q.selection.use_periods))
+    // A source without a selection used every column and period: options
+    // that select contradict it as much as different ones (a user review:
+    // --skip-periods 1 against an 8-period candidate read DISAGREES).
+    if (json_sel.inputs != q.selection.inputs || json_sel.outputs != q.selection.outputs ||
+        json_sel.skip_periods != q.selection.skip_periods || json_sel.use_periods != q.selection.use_periods)
       throw Error(ErrorKind::Input, "--input/--output/--skip-periods/--use-periods",
                   "contradict the candidate's \"source\" (" + src.dump() +
+                      (json_sel.empty() ? ", which selects nothing: every column and period" : std::string()) +
                       "); drop the options: check repeats what the candidate JSON says it did");
     s.selection = q.selection;
   }

@@ -1464,6 +1464,11 @@ TEST_F(CliFrf, RecordsAsTheyComeColumnsByNameAndSkippedPeriods) {
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", path("named.json"), "--data", measured, "--meta", meta9,
                                     "--input", "Voltage", "--output", "Acceleration1", "--skip-periods", "1"}),
                          {"contradict the candidate"}));
+  // A user review: options selecting periods against a candidate that used
+  // them all read DISAGREES; they contradict its source as much.
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", path("plain.json"), "--data", path("rec.csv"), "--meta",
+                                    path("rec.meta.json"), "--skip-periods", "1"}),
+                         {"contradict the candidate", "every column and period"}));
   // Bad selections are named, before any work.
   EXPECT_TRUE(IsBadInput(run_fdsid({"identify-frf", "--data", measured, "--meta", meta9, "--input", "force", "--output",
                                     "Acceleration1"}),
