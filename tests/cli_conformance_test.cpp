@@ -170,6 +170,27 @@ TEST_F(Conformance, TheTrueSystemPassesANoiseFreeCaseAndFailsAnotherSystemsCase)
   EXPECT_FALSE(entry(report, "frf_continuous4_F50_bilinear")["pass"].get<bool>());
   EXPECT_NE(entry(report, "frf_continuous4_F50_bilinear")["verdict"].get<std::string>().find("discrete-time"),
             std::string::npos);
+  // A user review: that FAIL row printed LRE scores like a pass's (the
+  // discrete matrices evaluated on the continuous case's axis): no scores now.
+  EXPECT_TRUE(entry(report, "frf_continuous4_F50_bilinear")["lre"].empty())
+      << entry(report, "frf_continuous4_F50_bilinear")["lre"];
+}
+
+// A user review: a candidate writing "sample_time": 0.001 for every case
+// passed without a note (the lines are per sample, so Ts was overwritten by
+// the case's). The true system with a wrong sample time fails, named.
+TEST_F(Conformance, AWrongSampleTimeFailsItsCase) {
+  const std::string model = kSuite + "/systems/akcay2011.json";
+  const RunResult r =
+      run_fdsid({"conformance", "--suite", kSuite, "--case", "akcay2011_M64", "--candidate",
+                 "sed 's/\"sample_time\": 1.0/\"sample_time\": 0.001/' " + model + " > {out}", "--json",
+                 path("report.json")});
+  ASSERT_EQ(r.status, 1) << describe(r);
+  const json report = read_json("report.json");
+  const json& c = entry(report, "akcay2011_M64");
+  EXPECT_FALSE(c["pass"].get<bool>());
+  EXPECT_NE(c["verdict"].get<std::string>().find("has sample_time 0.001 s; the case's is 1 s"), std::string::npos)
+      << c["verdict"];
 }
 
 TEST_F(Conformance, BadInputIsRefusedBeforeAnyCandidateRuns) {

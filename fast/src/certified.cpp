@@ -299,6 +299,7 @@ CaseScore score_candidate(const CertifiedCase& c, const StateSpace& candidate) {
   CaseScore s;
   const bool discrete = c.spec.domain == Domain::Discrete;
   const auto at = [discrete](double w) { return discrete ? std::polar(1.0, w) : cplx(0, w); };
+  bool comparable = false;  // the candidate's domain, sample time and sizes are the case's
   try {
     if (candidate.domain != c.reference.domain)
       throw Error(ErrorKind::Input, "candidate", std::string("is ") + to_string(candidate.domain) +
@@ -308,6 +309,14 @@ CaseScore score_candidate(const CertifiedCase& c, const StateSpace& candidate) {
                   "has " + std::to_string(candidate.inputs()) + " inputs and " + std::to_string(candidate.outputs()) +
                       " outputs; the case has " + std::to_string(c.reference.inputs()) + " and " +
                       std::to_string(c.reference.outputs()));
+    // The sample time is metadata copied from the case, not computed: a
+    // writer with 10 significant digits reproduces it to 1e-9 (a user review:
+    // "sample_time": 0.001 on every case passed without a note).
+    if (discrete && !(std::abs(candidate.sample_time - c.reference.sample_time) <= 1e-9 * c.reference.sample_time))
+      throw Error(ErrorKind::Input, "candidate",
+                  "has sample_time " + fmt(candidate.sample_time, 10) + " s; the case's is " +
+                      fmt(c.reference.sample_time, 10) + " s (its lines are per sample: write the case's)");
+    comparable = true;
     if (c.spec.kind == CaseKind::Spectrum) {
       OracleCheck k;
       k.p = c.spec.p;
@@ -344,6 +353,10 @@ CaseScore score_candidate(const CertifiedCase& c, const StateSpace& candidate) {
     s.verdict = std::string("DISAGREES: ") + e.what();
   }
   if (!s.verdict.empty() && s.verdict.back() == '\n') s.verdict.pop_back();
+  // A candidate of another domain, sample time or size has no scores: its
+  // matrices evaluated as the case's would print a pass's digits on a FAIL row
+  // (a user review).
+  if (!comparable) return s;
   for (const auto& q : c.certified) {
     if (q.name == "poles") s.quantities.push_back(score_points(q, poles(candidate)));
     else if (q.name == "zeros") s.quantities.push_back(score_points(q, zeros(candidate)));
