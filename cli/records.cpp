@@ -4,6 +4,7 @@
 // identified from (the NRMSE fit of MATLAB's compare).
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -83,7 +84,18 @@ int run_validate(const ValidateCommand& c) {
   refuse_overwrite(c.json_path, {c.model_path, c.data_path, c.meta_path}, "--json");
   const ModelFile file = read_model_with_diagnostics(c.model_path);
   const StateSpace& model = file.model;
-  const std::string columns_note = selection_against_model(file.json, c.selection, c.model_path);
+  std::vector<std::string> notes;
+  if (std::string n = selection_against_model(file.json, c.selection, c.model_path); !n.empty())
+    notes.push_back(std::move(n));
+  // A user review: validating on the very record the model was identified
+  // from printed fit 99 % as if the model had been validated.
+  if (file.json.contains("source") && file.json["source"].is_object() && file.json["source"].contains("data") &&
+      file.json["source"]["data"].is_string()) {
+    std::error_code ec;
+    if (std::filesystem::equivalent(file.json["source"]["data"].get<std::string>(), c.data_path, ec) && !ec)
+      notes.push_back("this is the record the model was identified from (its source.data): the fit is in-sample, "
+                      "not a validation; give a record the identification did not see");
+  }
   const Records rec = read_records(c.data_path, c.meta_path, c.selection);
   std::vector<std::string> warnings;
   if (!file.unusable.empty()) warnings.push_back(file.unusable);
@@ -109,7 +121,7 @@ int run_validate(const ValidateCommand& c) {
   out << "the model's periodic steady-state response to the record's input against its output, both averaged over "
       << fit.periods << (fit.periods == 1 ? " period" : " periods") << ", DC left out (fit = 100 (1 - ||y - yhat|| / ||y - mean y||), as MATLAB's compare)\n";
   if (below) out << "below --min-fit " << fmt(c.min_fit, 4) << " %\n";
-  if (!columns_note.empty()) out << "note: " << columns_note << "\n";
+  for (const std::string& n : notes) out << "note: " << n << "\n";
   for (const std::string& w : warnings) out << "warning: " << w << "\n";
   emit_json(c.json_path, {{"model", c.model_path},
                           {"data", c.data_path},
@@ -118,7 +130,7 @@ int run_validate(const ValidateCommand& c) {
                           {"lines", fit.lines},
                           {"outputs", outputs},
                           {"warnings", warnings},
-                          {"notes", columns_note.empty() ? std::vector<std::string>{} : std::vector{columns_note}},
+                          {"notes", notes},
                           {"pass", !below}});
   return below ? 1 : 0;
 }

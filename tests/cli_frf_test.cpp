@@ -1610,6 +1610,13 @@ TEST_F(CliFrf, ValidateScoresAModelOnARecord) {
                                    path("low.meta.json")});
   ASSERT_TRUE(Succeeded(own));
   EXPECT_EQ(own.out.find("warning"), std::string::npos) << own.out;
+  // A user review: the fit on the model's own identification record read as
+  // a validation. It is named so; another record is not.
+  EXPECT_NE(own.out.find("note: this is the record the model was identified from (its source.data): the fit is "
+                         "in-sample"),
+            std::string::npos)
+      << own.out;
+  EXPECT_EQ(wide.out.find("in-sample"), std::string::npos) << wide.out;
   // Review finding 2 of stop 48: a model whose own file says it is unusable in double precision is named
   // by validate, gap and simulate-records (the same model marked usable, above, draws no word).
   json unusable = read_json("low_model.json");
