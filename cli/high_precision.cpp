@@ -629,8 +629,6 @@ CandidateSettings candidate_settings(const json& cj, const FrfCheckRequest& q, c
   c.discrete = chosen.discrete;
   if (c.domain == Domain::Continuous && method_s.empty())
     c.note += "method: bilinear (Algorithm 2.1; neither the candidate nor --method names one); ";
-  if (c.domain == Domain::Continuous && method_s.empty())
-    c.note += "method: bilinear (Algorithm 2.1; neither the candidate nor --method names one); ";
   const int json_r = int_field(cj, "r", q.model_path);
   c.r = setting<int>("r", json_r, q.r, 0, q.model_path, std::to_string(json_r), std::to_string(q.r));
   const double json_ws = cj.contains("omega_scale") && cj["omega_scale"].is_number() ? cj["omega_scale"].get<double>() : 0;

@@ -1233,6 +1233,17 @@ TEST_F(CliFrf, CheckAgreesWithACorrectCandidateInEveryDomainAndMethod) {
   const std::string no_r = write("no_r.json", bare.dump());
   const RunResult s = run_fdsid({"check", "--model", no_r, "--frf", d, "--r", "8"});
   EXPECT_EQ(s.status, 0) << describe(s);
+  // Without a method, a continuous candidate is checked as bilinear, and the
+  // note says so once (a user review saw it twice on one line).
+  json no_method = read_json("bilinear.json");
+  no_method.erase("method");
+  const RunResult m = run_fdsid({"check", "--model", write("no_method.json", no_method.dump()), "--frf", c, "--json",
+                                 path("no_method.check.json")});
+  EXPECT_EQ(m.status, 0) << describe(m);
+  const std::string note = read_json("no_method.check.json")["note"].get<std::string>();
+  const std::string said = "method: bilinear (Algorithm 2.1; neither the candidate nor --method names one)";
+  ASSERT_NE(note.find(said), std::string::npos) << note;
+  EXPECT_EQ(note.find(said, note.find(said) + 1), std::string::npos) << note;
 }
 
 TEST_F(CliFrf, CheckCatchesTheClassicMistakes) {
