@@ -533,7 +533,7 @@ TEST_F(Cli, HelpExitsZero) {
 }
 
 // ---------------------------------------------------------------------------
-// Known CLI defects, disabled until fixed (run with --gtest_also_run_disabled_tests).
+// Defects found in reviews of the CLI, each kept as the test that pins its fix.
 
 // `sample-spectrum --epsilon inf` exits 0 and writes -inf/nan samples; nan and
 // negative levels are silently taken as "no noise".

@@ -284,9 +284,23 @@ TEST(Failures, DimensionsAreChecked) {
     EXPECT_EQ(e.kind(), ErrorKind::Dimension);
     EXPECT_NE(std::string(e.what()).find("p + r"), std::string::npos) << e.what();
   }
-  SpectrumData bad = d;
-  bad.S(0, 3) = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_THROW(identify_spectrum(bad, SpectrumOptions{}), Error);
+  // A non-finite real or imaginary part anywhere is bad input; the check sums
+  // 0·x over the parts (spectrum_id.cpp check_input), so each kind is tried in
+  // each part, at the first, a middle and the last sample.
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  for (const cplx v : {cplx(nan, 0), cplx(inf, 0), cplx(-inf, 0), cplx(1, nan), cplx(1, inf), cplx(1, -inf)})
+    for (const Eigen::Index k : {Eigen::Index{0}, d.S.cols() / 2, d.S.cols() - 1}) {
+      SCOPED_TRACE(std::to_string(v.real()) + " + " + std::to_string(v.imag()) + "i at k = " + std::to_string(k));
+      SpectrumData bad = d;
+      bad.S(0, k) = v;
+      try {
+        identify_spectrum(bad, SpectrumOptions{});
+        ADD_FAILURE() << "taken";
+      } catch (const Error& e) {
+        EXPECT_EQ(e.kind(), ErrorKind::Input) << e.what();
+        EXPECT_NE(std::string(e.what()).find("NaN or infinite"), std::string::npos) << e.what();
+      }
+    }
 }
 
 TEST(DefaultPR, MeetTheInequalitiesOfStep2) {

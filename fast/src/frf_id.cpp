@@ -379,12 +379,14 @@ Eigen::MatrixXd step1ab_qr(const FrfData& d, const Bases& b, int r) {
   Eigen::MatrixXd R = numerics::streamed_qr_r(F, 2 * c, cols, fill);
   const Eigen::VectorXd r11 = R.topLeftCorner(nu, nu).diagonal().cwiseAbs();
   const double r11max = r11.maxCoeff();
-  if (!numerics::numerically_full_rank(r11, std::sqrt(2.0 * F * c)))
+  if (!numerics::numerically_full_rank(r11, std::sqrt(2.0 * F * c))) {
+    const std::string ratio = r11max > 0 ? fmt(r11.minCoeff() / r11max, 3)
+                                         : "0 / 0: R11 is zero, the input zero or so small that its squares underflow";
     fail(ErrorKind::Numerical, "step 1b",
-         "the input data matrix U^re is rank deficient (min |R11_ii| / max = " +
-             (r11max > 0 ? fmt(r11.minCoeff() / r11max, 3) : std::string("0 / 0: R11 is zero, the input zero or so small that its squares underflow")) +
+         "the input data matrix U^re is rank deficient (min |R11_ii| / max = " + ratio +
              "): the input does not excite r = " + std::to_string(r) +
              " basis functions (Pintelon 2002 Assumption 3): " + band_advice(d, b, r) + ", or excite more lines");
+  }
   return R;
 }
 
