@@ -354,6 +354,12 @@ struct Dims {
   int m, M, N, p, r;
 };
 
+// The samples' real and imaginary parts as one array (std::complex<double> is
+// two doubles, real first): the input checks scan it in vector registers.
+Eigen::Map<const Eigen::ArrayXd> sample_parts(const SpectrumData& data) {
+  return {reinterpret_cast<const double*>(data.S.data()), 2 * data.S.size()};
+}
+
 // Input checks and defaults.
 //
 // Purpose: validate the samples and the options, and fix p and r.
@@ -376,8 +382,8 @@ Dims check_input(const SpectrumData& data, const SpectrumOptions& opt) {
   // finite (0·±inf and 0·NaN are NaN, 0·x = ±0 otherwise, never an overflow);
   // Eigen sums it in vector registers, where allFinite on complex entries is
   // a scalar loop with a branch per part (~0.1 ms at M = 32000: perf, issue 16).
-  const Eigen::Map<const Eigen::ArrayXd> parts(reinterpret_cast<const double*>(data.S.data()), 2 * data.S.size());
-  if (!((parts * 0.0).sum() == 0.0)) throw Error(ErrorKind::Input, "spectrum", "a sample is NaN or infinite");
+  if (!((sample_parts(data) * 0.0).sum() == 0.0))
+    throw Error(ErrorKind::Input, "spectrum", "a sample is NaN or infinite");
   if (opt.order < 0) throw Error(ErrorKind::Order, "step 4", "order must be positive");
   int dp, dr;
   default_pr(M, opt.order, dp, dr);
@@ -945,8 +951,7 @@ namespace {
 // M = 32000: perf, issue 16); the modulus itself only when b may lie out of range.
 int spectrum_scale_exponent(const SpectrumData& data) {
   if (data.S.size() == 0) return 0;  // check_input refuses it
-  const double bound = Eigen::Map<const Eigen::ArrayXd>(reinterpret_cast<const double*>(data.S.data()),
-                                                        2 * data.S.size()).abs().maxCoeff();
+  const double bound = sample_parts(data).abs().maxCoeff();
   if (bound >= std::ldexp(1.0, -256) && bound <= std::ldexp(1.0, 255)) return 0;  // |s| <= √2 b < 2^256
   const double top = data.S.cwiseAbs().maxCoeff();
   if (!(top > 0) || !std::isfinite(top) || (top >= std::ldexp(1.0, -256) && top <= std::ldexp(1.0, 256))) return 0;
