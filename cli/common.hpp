@@ -169,9 +169,10 @@ void refuse_overwrite(const std::string& output, std::initializer_list<std::stri
 /// Prints the human summary unless the JSON goes to stdout.
 struct Out {
   bool quiet;
+  std::ostream* to = &std::cout;  ///< std::cerr where stdout carries the command's data (e.g. --out -)
   template <class T>
   Out& operator<<(const T& v) {
-    if (!quiet) std::cout << v;
+    if (!quiet) *to << v;
     return *this;
   }
 };

@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <sstream>
 
 #include "common.hpp"
 #include "fdsid/error.hpp"
@@ -47,10 +46,11 @@ int run_frf(const FrfCommand& c) {
   write_text_file(c.out_path, frf_csv(frf));
   // With the CSV on stdout (--out -) the summary goes to stderr: on stdout
   // it followed the rows, and identify-frf refused the file (a user review).
-  std::ostringstream out;
+  Out out{c.json_path == "-", c.out_path == "-" ? &std::cerr : &std::cout};
   // The command that identifies from the file (summary and JSON "identify").
   const std::string identify =
-      "identify-frf --frf " + (c.out_path == "-" ? std::string("FILE") : c.out_path) + (c.domain == Domain::Continuous ? " --domain continuous" : "") +
+      "identify-frf --frf " + (c.out_path == "-" ? std::string("FILE") : c.out_path) +
+      (c.domain == Domain::Continuous ? " --domain continuous" : "") +
       (rec.meta.periods >= 4 ? " --frf-periods " + std::to_string(rec.meta.periods) : std::string());
   out << "wrote " << c.out_path << ": G = Y/U and G_var at " << frf.frequencies() << " excited lines from M = "
       << rec.meta.periods << " periods (omega in " << (c.domain == Domain::Discrete ? "rad/sample" : "rad/s")
@@ -62,7 +62,6 @@ int run_frf(const FrfCommand& c) {
     out << "warning: G_var is a sample variance over only M = " << rec.meta.periods
         << " periods: identify-frf --frf reads it as a known variance and judges the fit by that law, which is far "
            "off at this M (identify-frf needs M >= 4 for the sample law: use more periods)\n";
-  if (c.json_path != "-") (c.out_path == "-" ? std::cerr : std::cout) << out.str();
   emit_json(c.json_path, {{"data", c.data_path},
                           {"meta", c.meta_path},
                           {"out", c.out_path},
