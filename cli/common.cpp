@@ -307,6 +307,16 @@ void print_poles(Out& out, const Eigen::VectorXcd& poles) {
   out << "\n";
 }
 
+namespace {
+void print_prefixed(Out& out, const char* prefix, const std::vector<std::string>& lines) {
+  for (const std::string& line : lines) out << prefix << line << "\n";
+}
+}  // namespace
+
+void print_notes(Out& out, const std::vector<std::string>& notes) { print_prefixed(out, "note: ", notes); }
+
+void print_warnings(Out& out, const std::vector<std::string>& warnings) { print_prefixed(out, "warning: ", warnings); }
+
 // Review finding 5 of stop 47: an F-16 model identified on 2-15 Hz scored
 // -4.06 % on a record to 60 Hz without a word. A model from identify-frf
 // carries the band of its data ("omega_band"); the record's excited lines

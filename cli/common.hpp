@@ -9,6 +9,7 @@
 #include <iostream>
 #include <map>
 #include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
@@ -179,6 +180,11 @@ struct Out {
 
 /// "poles:  re+imi  ..." and a newline.
 void print_poles(Out& out, const Eigen::VectorXcd& poles);
+
+/// One "note: …" line per note, one "warning: …" line per warning: the
+/// prefixes every command's summary gives them.
+void print_notes(Out& out, const std::vector<std::string>& notes);
+void print_warnings(Out& out, const std::vector<std::string>& warnings);
 
 /// The record's excited lines outside the band the model was identified on
 /// (its JSON's "omega_band", identify-frf writes it), as a warning: "" when

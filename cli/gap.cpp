@@ -235,7 +235,7 @@ void print_report(Out& out, const GapReport& r, int periods) {
     for (const auto& kv : fdsid::parameter_list(f.parameters)) out << " " << kv.first << "=" << parameter_text(kv.second);
     out << "\n";
   }
-  for (const std::string& n : r.notes) out << "note: " << n << "\n";
+  print_notes(out, r.notes);
 }
 
 // The summary line of several outputs (MultiGapReport's verdict).
@@ -306,8 +306,8 @@ int run_gap(const GapCommand& c) {
     out << "gap before " << sci(m.gap_before) << " (mean over " << outputs << " outputs; 1 = the model is right up "
         << "to the noise), after " << sci(m.gap_after) << "; joint gap " << sci(m.gap_joint) << "\n";
     out << multi_verdict_line(m, names) << "\n";
-    for (const std::string& n : m.notes) out << "note: " << n << "\n";
-    for (const std::string& w : warnings) out << "warning: " << w << "\n";
+    print_notes(out, m.notes);
+    print_warnings(out, warnings);
     for (size_t k = 0; k < m.channels.size(); ++k) {
       out << "== output " << k + 1 << " (" << names[k] << ")\n";
       print_report(out, m.channels[k], meta.periods);
@@ -326,7 +326,7 @@ int run_gap(const GapCommand& c) {
   }
   if (!columns_note.empty()) r.notes.push_back(columns_note);
   print_report(out, r, meta.periods);
-  for (const std::string& w : warnings) out << "warning: " << w << "\n";
+  print_warnings(out, warnings);
   if (!c.table_path.empty()) write_gap_table(c.table_path, r);
   nlohmann::json j = to_json(r);
   if (!warnings.empty()) j["warnings"] = warnings;

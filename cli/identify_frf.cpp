@@ -373,7 +373,7 @@ int run(const IdentifyFrfCommand& c) {
       << (source.periods > 0 ? ", M = " + std::to_string(source.periods) + " periods" : std::string())
       << ", r = " << res.r << (o.r > 0 ? "" : res.r_unusable_least_v_sub > 0 ? " (least V_SUB of the r with a usable estimate)" : " (minimising V_SUB)") << "\n";
   print_poles(out, res.poles);
-  for (const std::string& n : res.notes) out << "note: " << n << "\n";
+  print_notes(out, res.notes);
   if (!stabilised.empty()) out << "note: " << stabilised << "\n";
   if (c.refine) print_refinement(out, refined, ro, res.model.domain, res.model.sample_time);
   FitVerdict fit = fit_verdict(res, data, source);
@@ -381,7 +381,7 @@ int run(const IdentifyFrfCommand& c) {
   if (fit.misfit) res.warnings.push_back(fit.warning());
   out << fit.summary() << "\n";
   if (c.improper) out << "the model is the inverse system 1/G (improper G, Pintelon 2002 Section 5)\n";
-  for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
+  print_warnings(out, res.warnings);
   if (refused_as_unusable(c.strict, res.usability_estimate())) return 1;
   nlohmann::json j = to_json(res, method, source);
   // The band the data cover, in the model's omega (rad/sample; rad/s in

@@ -71,7 +71,7 @@ int run(const IdentifySpectrumCommand& c) {
   print_poles(out, poles(res.model));
   out << "Riccati: " << res.riccati_method << ", " << res.riccati_iterations << " iterations, residual "
       << sci(res.riccati_residual, 1) << "\n";
-  for (const std::string& w : res.warnings) out << "warning: " << w << "\n";
+  print_warnings(out, res.warnings);
   if (refused_as_unusable(c.strict, res.error_estimate)) return 1;
   if (!c.refine) {
     emit_json(c.json_path, to_json(res, c.data_path));
@@ -88,7 +88,7 @@ int run(const IdentifySpectrumCommand& c) {
       << " -> " << sci(refined.cost) << " over " << refined.terms << " terms, " << refined.iterations << " iterations ("
       << refined.termination << "), largest |zero| " << fmt(refined.max_zero_modulus, 6) << "\n";
   print_poles(out, poles(refined.model));
-  for (const std::string& w : refined.warnings) out << "warning: " << w << "\n";
+  print_warnings(out, refined.warnings);
   SpectrumResult shown = res;  // the written model is the refined factor; Algorithm 1's goes under "refinement"
   shown.model = refined.model;
   shown.summands = spectral_summands(refined.model);

@@ -120,8 +120,8 @@ int run_validate(const ValidateCommand& c) {
   out << "the model's periodic steady-state response to the record's input against its output, both averaged over "
       << fit.periods << (fit.periods == 1 ? " period" : " periods") << ", DC left out (fit = 100 (1 - ||y - yhat|| / ||y - mean y||), as MATLAB's compare)\n";
   if (below) out << "below --min-fit " << fmt(c.min_fit, 4) << " %\n";
-  for (const std::string& n : notes) out << "note: " << n << "\n";
-  for (const std::string& w : warnings) out << "warning: " << w << "\n";
+  print_notes(out, notes);
+  print_warnings(out, warnings);
   emit_json(c.json_path, {{"model", c.model_path},
                           {"data", c.data_path},
                           {"meta", c.meta_path},

@@ -80,7 +80,8 @@ int run(const SampleSpectrumCommand& c) {
                          " exceeds the spectrum there): no power spectrum has them, and identify-spectrum may find "
                          "no positive-real factor");
   }
-  for (const std::string& w : warnings) std::cerr << "warning: " << w << "\n";
+  Out err{false, &std::cerr};  // stderr, unconditionally: the CSV may be on stdout
+  print_warnings(err, warnings);
   std::ostringstream s;
   write_spectrum_csv(s, d);
   write_text_file(c.out_path, s.str());
