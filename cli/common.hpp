@@ -16,6 +16,7 @@
 
 #include "fdsid/format.hpp"
 #include "fdsid/io.hpp"
+#include "fdsid/names.hpp"
 #include "fdsid/plot.hpp"
 
 namespace fdsid::cli {
@@ -76,6 +77,12 @@ CLI::Validator choice(const std::map<std::string, E>& names, const std::string& 
         return map(value);
       },
       desc + "}");
+}
+
+/// choice() of an enumeration's name table (fdsid/names.hpp): "is not a, b or c".
+template <class E>
+CLI::Validator choice(const NameTable<E>& names) {
+  return choice(std::map<std::string, E>(names.begin(), names.end()), "is not " + name_list(names));
 }
 
 extern const std::map<std::string, Precision> kPrecisions;  // double, high

@@ -142,7 +142,7 @@ int identify_spectrum_high(const std::string& json_path, const std::string& data
   j["data"] = data_path;
   j["precision"] = precision_label();
   if (json_path != "-") {
-    std::cout << "identified order " << res.order << " in high precision by " << (vo ? "vo1997" : "akcay2011")
+    std::cout << "identified order " << res.order << " in high precision by " << to_string(vo ? Method::VanOverschee1997 : Method::Akcay2011)
               << " from M = " << M << ", m = " << m << ", p = " << res.p << ", r = " << res.r << "\npoles:";
     for (const auto& z : j["poles"]) {
       char buf[96];
@@ -170,22 +170,17 @@ int check(const std::string& json_path, const std::string& model_path, const std
   // A method or extension given must be one the reference runs: a typo read
   // as the default turned a correct candidate into DISAGREES with no hint (a
   // user review: "extension": "conjugat").
-  const auto spectrum_setting = [&](const char* key, const std::vector<std::string>& allowed,
-                                    const std::string& frf_hint) -> std::string {
-    if (!cj.contains(key)) return "";
+  const auto spectrum_setting = [&](const char* key, const auto& names, auto absent, const std::string& frf_hint) {
+    if (!cj.contains(key)) return absent;
     const std::string v = cj[key].is_string() ? cj[key].get<std::string>() : cj[key].dump();
-    if (std::find(allowed.begin(), allowed.end(), v) != allowed.end()) return v;
-    std::string list;
-    for (size_t i = 0; i < allowed.size(); ++i) list += (i ? i + 1 == allowed.size() ? " or " : ", " : "") + allowed[i];
+    if (const auto value = from_name(names, v)) return *value;
     throw Error(ErrorKind::Input, model_path + " field \"" + key + "\"",
-                "\"" + v + "\" is not " + list + (v.rfind("pintelon2002", 0) == 0 ? frf_hint : std::string()));
+                "\"" + v + "\" is not " + name_list(names) + (v.rfind("pintelon2002", 0) == 0 ? frf_hint : std::string()));
   };
-  const bool vo = spectrum_setting("method", {"akcay2011", "vo1997"},
-                                   ": an FRF model; check it with --frf FRF.csv or --data RECORDS.csv --meta") ==
-                  "vo1997";
-  const Extension ext = spectrum_setting("extension", {"hermitian-part", "conjugate"}, "") == "conjugate"
-                            ? Extension::Conjugate
-                            : Extension::HermitianPart;
+  const Method method = spectrum_setting("method", method_names(), Method::Akcay2011,
+                                         ": an FRF model; check it with --frf FRF.csv or --data RECORDS.csv --meta");
+  const bool vo = method == Method::VanOverschee1997;
+  const Extension ext = spectrum_setting("extension", extension_names(), Extension::HermitianPart, "");
   if (candidate.order() < 1) throw Error(ErrorKind::Input, model_path, "candidate has order 0");
 
   int m = 0, M = 0;
@@ -228,7 +223,7 @@ int check(const std::string& json_path, const std::string& model_path, const std
   };
   assume("p", std::to_string(p) + " (the default rule for M = " + std::to_string(M) + ")");  // absent: not given
   assume("r", std::to_string(r));
-  assume("method", vo ? "vo1997" : "akcay2011");
+  assume("method", to_string(method));
   assume("extension", to_string(ext));
   if (!assumed.empty())
     note = "compared at " + assumed + ": the candidate JSON does not give them (add \"p\", \"r\", \"method\", "
@@ -239,7 +234,7 @@ int check(const std::string& json_path, const std::string& model_path, const std
   k.data_path = data_path;
   k.p = p;
   k.r = r;
-  k.method = vo ? Method::VanOverschee1997 : Method::Akcay2011;
+  k.method = method;
   k.extension = ext;
   k.reference_model = reference::result_to_json(res, vo, 40);
   StateSpace ref = model_from_json(k.reference_model, "reference model");  // decimal strings, correctly rounded
@@ -474,7 +469,7 @@ CandidateMethod candidate_method(const json& cj, const std::string& model_path) 
       {"pintelon2002-alg2-bilinear", {Domain::Continuous, "bilinear"}},
       {"pintelon2002-alg2-orthogonal", {Domain::Continuous, "orthogonal"}}};
   if (const auto it = known.find(m); it != known.end()) return {m, it->second.first, it->second.second};
-  if (m == "akcay2011" || m == "vo1997")
+  if (from_name(method_names(), m))
     throw Error(ErrorKind::Input, model_path + " field \"method\"",
                 "\"" + m + "\" is a spectral factor; check it against its spectrum with --data SPECTRUM.csv");
   throw Error(ErrorKind::Input, model_path + " field \"method\"",

@@ -116,15 +116,11 @@ void register_identify_spectrum(CLI::App& app, Action& chosen) {
   ids->add_option("--p", o.p, "block rows of Y (default: min(50, M), at least 2n+1)")->check(count_at_least(1));
   ids->add_option("--r", o.r, "block columns of Y (default: min(50, N - p), at least 2n)")->check(count_at_least(1));
   ids->add_option("--method", o.method, "akcay2011 (default) or vo1997")
-      ->transform(choice(std::map<std::string, Method>{{"akcay2011", Method::Akcay2011},
-                                                       {"vo1997", Method::VanOverschee1997}},
-                         "is not akcay2011 or vo1997"));
+      ->transform(choice(method_names()));
   ids->add_option("--precision", c->precision, "double (default) or high")
       ->transform(choice(kPrecisions, "is not double or high"));
   ids->add_option("--extension", o.extension, "step 1 reading: hermitian-part (default) or conjugate")
-      ->transform(choice(std::map<std::string, Extension>{{"hermitian-part", Extension::HermitianPart},
-                                                          {"conjugate", Extension::Conjugate}},
-                         "is not hermitian-part or conjugate"));
+      ->transform(choice(extension_names()));
   ids->add_flag("--refine", c->refine,
                 "refine Algorithm 1's factor by weighted nonlinear least squares on the samples (weights 1/S_var when "
                 "the CSV has an S_var column, else unit), kept stable and minimum phase");

@@ -136,9 +136,7 @@ void register_table2(CLI::App* reproduce, Action& chosen) {
   t2->add_option("--seed", o.seed, "random seed")->capture_default_str();
   t2->add_option("--threads", o.threads, "worker threads (0 = all cores)")->check(CLI::Range(0, 1024))->capture_default_str();
   t2->add_option("--extension", o.extension, "step 1 reading: conjugate (default: reproduces the paper) or hermitian-part")
-      ->transform(choice(std::map<std::string, Extension>{{"hermitian-part", Extension::HermitianPart},
-                                                          {"conjugate", Extension::Conjugate}},
-                         "is not hermitian-part or conjugate"));
+      ->transform(choice(extension_names()));
   t2->add_option("--noise-variance", o.noise, "unit-complex (E|v|^2 = 1, default) or unit-per-component (E|v|^2 = 2)")
       ->transform(choice(std::map<std::string, NoiseVariance>{{"unit-complex", NoiseVariance::UnitComplex},
                                                               {"unit-per-component", NoiseVariance::UnitPerComponent}},

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <set>
 
 #include <Eigen/SVD>
@@ -104,14 +105,16 @@ CaseSpec spec_from_json(const json& j, const std::string& where) {
     throw Error(ErrorKind::Input, g.where + " field \"domain\"", "use discrete or continuous");
   s.domain = domain == "continuous" ? Domain::Continuous : Domain::Discrete;
   if (s.kind == CaseKind::Spectrum) {
-    if (method != "akcay2011" && method != "vo1997")
-      throw Error(ErrorKind::Input, g.where + " field \"method\"", "a spectrum case uses akcay2011 or vo1997");
-    s.spectrum_method = method == "vo1997" ? Method::VanOverschee1997 : Method::Akcay2011;
+    const std::optional<Method> m = from_name(method_names(), method);
+    if (!m) throw Error(ErrorKind::Input, g.where + " field \"method\"", "a spectrum case uses " + name_list(method_names()));
+    s.spectrum_method = *m;
     if (s.domain != Domain::Discrete) throw Error(ErrorKind::Input, g.where, "a spectrum case is discrete");
   } else if (s.domain == Domain::Continuous) {
-    if (method != "bilinear" && method != "orthogonal")
-      throw Error(ErrorKind::Input, g.where + " field \"method\"", "a continuous case uses bilinear or orthogonal");
-    s.continuous_method = method == "orthogonal" ? ContinuousMethod::Orthogonal : ContinuousMethod::Bilinear;
+    const std::optional<ContinuousMethod> m = from_name(continuous_method_names(), method);
+    if (!m)
+      throw Error(ErrorKind::Input, g.where + " field \"method\"",
+                  "a continuous case uses " + name_list(continuous_method_names()));
+    s.continuous_method = *m;
     s.omega_scale = g.number("omega_scale", 0);
     if (s.omega_scale <= 0) throw Error(ErrorKind::Input, g.where, "a continuous case gives \"omega_scale\"");
   } else if (method != "discrete") {

@@ -570,13 +570,21 @@ int check_order_r(const FrfData& d, int order, int r) {
 
 }  // namespace
 
-const char* to_string(ContinuousMethod m) {
-  return m == ContinuousMethod::Bilinear ? "bilinear" : "orthogonal";
+const NameTable<ContinuousMethod>& continuous_method_names() {
+  static const NameTable<ContinuousMethod> names{{"bilinear", ContinuousMethod::Bilinear},
+                                                 {"orthogonal", ContinuousMethod::Orthogonal}};
+  return names;
 }
 
-const char* to_string(DiscreteMethod m) {
-  return m == DiscreteMethod::Monomial ? "monomial" : m == DiscreteMethod::Bilinear ? "bilinear" : "orthogonal";
+const NameTable<DiscreteMethod>& discrete_method_names() {
+  static const NameTable<DiscreteMethod> names{{"monomial", DiscreteMethod::Monomial},
+                                               {"bilinear", DiscreteMethod::Bilinear},
+                                               {"orthogonal", DiscreteMethod::Orthogonal}};
+  return names;
 }
+
+const char* to_string(ContinuousMethod m) { return name_of(continuous_method_names(), m); }
+const char* to_string(DiscreteMethod m) { return name_of(discrete_method_names(), m); }
 
 double default_discrete_scale(const Eigen::VectorXd& omega) {
   double lo = M_PI, hi = 0;

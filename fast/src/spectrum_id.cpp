@@ -224,8 +224,17 @@ void sqrt_spd(const Eigen::MatrixXd& X, Eigen::MatrixXd& root, Eigen::MatrixXd& 
 
 }  // namespace
 
-const char* to_string(Method m) { return m == Method::Akcay2011 ? "akcay2011" : "vo1997"; }
-const char* to_string(Extension e) { return e == Extension::HermitianPart ? "hermitian-part" : "conjugate"; }
+const NameTable<Method>& method_names() {
+  static const NameTable<Method> names{{"akcay2011", Method::Akcay2011}, {"vo1997", Method::VanOverschee1997}};
+  return names;
+}
+const NameTable<Extension>& extension_names() {
+  static const NameTable<Extension> names{{"hermitian-part", Extension::HermitianPart},
+                                          {"conjugate", Extension::Conjugate}};
+  return names;
+}
+const char* to_string(Method m) { return name_of(method_names(), m); }
+const char* to_string(Extension e) { return name_of(extension_names(), e); }
 
 void default_pr(int M, int n, int& p, int& r) {
   const int N = 2 * M;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 
 #include "fdsid/error.hpp"
 #include "fdsid/format.hpp"
@@ -68,28 +69,26 @@ std::string frf_method_name(Domain domain, ContinuousMethod method, DiscreteMeth
 }
 
 void set_frf_method(const std::string& name, Domain domain, FrfOptions& options) {
+  // An empty name is the default: monomial (discrete), bilinear (continuous).
   if (domain == Domain::Discrete) {
-    if (name.empty() || name == "monomial")
-      options.discrete = DiscreteMethod::Monomial;
-    else if (name == "bilinear")
-      options.discrete = DiscreteMethod::Bilinear;
-    else if (name == "orthogonal")
-      options.discrete = DiscreteMethod::Orthogonal;
-    else
+    const std::optional<DiscreteMethod> m = name.empty() ? DiscreteMethod::Monomial : from_name(discrete_method_names(), name);
+    if (!m)
       throw Error(ErrorKind::Input, "--method",
-                  "\"" + name + "\" is not monomial, bilinear or orthogonal (discrete time)");
+                  "\"" + name + "\" is not " + name_list(discrete_method_names()) + " (discrete time)");
+    options.discrete = *m;
     return;
   }
-  if (name.empty() || name == "bilinear")
-    options.continuous = ContinuousMethod::Bilinear;
-  else if (name == "orthogonal")
-    options.continuous = ContinuousMethod::Orthogonal;
-  else if (name == "monomial")
+  const std::optional<ContinuousMethod> m = name.empty() ? ContinuousMethod::Bilinear : from_name(continuous_method_names(), name);
+  if (m) {
+    options.continuous = *m;
+    return;
+  }
+  const std::string continuous = name_list(continuous_method_names());
+  if (name == to_string(DiscreteMethod::Monomial))
     throw Error(ErrorKind::Input, "--method",
-                "monomial (Algorithm 1) is a discrete-time method; continuous time: bilinear or orthogonal, or give --domain "
+                "monomial (Algorithm 1) is a discrete-time method; continuous time: " + continuous + ", or give --domain "
                 "discrete with the frequencies in rad/sample");
-  else
-    throw Error(ErrorKind::Input, "--method", "\"" + name + "\" is not bilinear or orthogonal (continuous time)");
+  throw Error(ErrorKind::Input, "--method", "\"" + name + "\" is not " + continuous + " (continuous time)");
 }
 
 void require_spectrum_model(const StateSpace& model, const std::string& where) {

@@ -11,6 +11,7 @@
 
 #include "fdsid/matrix_stack.hpp"
 #include "fdsid/model.hpp"
+#include "fdsid/names.hpp"
 
 namespace fdsid {
 
@@ -87,6 +88,10 @@ enum class DiscreteMethod {
   Orthogonal
 };
 const char* to_string(DiscreteMethod m);
+/// The names of the two enumerations' values (bilinear, orthogonal; monomial,
+/// bilinear, orthogonal): to_string's, --method's and the cases' "method".
+const NameTable<ContinuousMethod>& continuous_method_names();
+const NameTable<DiscreteMethod>& discrete_method_names();
 
 struct FrfOptions {
   int order = 0;  ///< n_a; 0 reads it from the singular values of step 1c

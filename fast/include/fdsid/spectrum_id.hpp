@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 
 #include "fdsid/model.hpp"
+#include "fdsid/names.hpp"
 
 namespace fdsid {
 
@@ -42,6 +43,10 @@ enum class Extension {
   Conjugate
 };
 const char* to_string(Extension e);
+/// The names of Method's and Extension's values (akcay2011, vo1997;
+/// hermitian-part, conjugate): to_string's, the CLI's and the JSON fields'.
+const NameTable<Method>& method_names();
+const NameTable<Extension>& extension_names();
 
 struct SpectrumOptions {
   Method method = Method::Akcay2011;
