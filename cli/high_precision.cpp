@@ -452,6 +452,20 @@ T setting(const char* name, const T& from_json, const T& from_cli, const T& none
   return from_json != none ? from_json : from_cli;
 }
 
+// The FRF models' "method" names (frf_method_name of every basis, discrete
+// then continuous), each with its domain and its basis in --method's words.
+const NameTable<std::pair<Domain, const char*>>& frf_model_methods() {
+  static const NameTable<std::pair<Domain, const char*>> names = [] {
+    NameTable<std::pair<Domain, const char*>> t;
+    for (const auto& [basis, m] : discrete_method_names())
+      t.push_back({frf_method_name(Domain::Discrete, ContinuousMethod::Bilinear, m), {Domain::Discrete, basis.c_str()}});
+    for (const auto& [basis, m] : continuous_method_names())
+      t.push_back({frf_method_name(Domain::Continuous, m), {Domain::Continuous, basis.c_str()}});
+    return t;
+  }();
+  return names;
+}
+
 // The candidate's "method" (frf_method_name's names): the domain it belongs
 // to and its basis in --method's words; an empty basis when the JSON has none.
 struct CandidateMethod {
@@ -462,19 +476,11 @@ struct CandidateMethod {
 CandidateMethod candidate_method(const json& cj, const std::string& model_path) {
   if (!cj.contains("method")) return {};
   const std::string m = cj["method"].is_string() ? cj["method"].get<std::string>() : "";
-  static const std::map<std::string, std::pair<Domain, const char*>> known = {
-      {"pintelon2002-alg1", {Domain::Discrete, "monomial"}},
-      {"pintelon2002-alg1-bilinear", {Domain::Discrete, "bilinear"}},
-      {"pintelon2002-alg1-orthogonal", {Domain::Discrete, "orthogonal"}},
-      {"pintelon2002-alg2-bilinear", {Domain::Continuous, "bilinear"}},
-      {"pintelon2002-alg2-orthogonal", {Domain::Continuous, "orthogonal"}}};
-  if (const auto it = known.find(m); it != known.end()) return {m, it->second.first, it->second.second};
+  if (const auto known = from_name(frf_model_methods(), m)) return {m, known->first, known->second};
   if (from_name(method_names(), m))
     throw Error(ErrorKind::Input, model_path + " field \"method\"",
                 "\"" + m + "\" is a spectral factor; check it against its spectrum with --data SPECTRUM.csv");
-  throw Error(ErrorKind::Input, model_path + " field \"method\"",
-              "is not pintelon2002-alg1, pintelon2002-alg1-bilinear, pintelon2002-alg1-orthogonal, "
-              "pintelon2002-alg2-bilinear or pintelon2002-alg2-orthogonal");
+  throw Error(ErrorKind::Input, model_path + " field \"method\"", "is not " + name_list(frf_model_methods()));
 }
 
 }  // namespace

@@ -1393,6 +1393,10 @@ TEST_F(CliFrf, CheckRefusesWhatItCannotCompare) {
   spectral["method"] = "akcay2011";
   EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", write("s.json", spectral.dump()), "--frf", d}),
                          {"spectral factor", "--data"}));
+  spectral["method"] = "pintelon2002-alg3";  // every FRF method is named in the refusal
+  EXPECT_TRUE(IsBadInput(run_fdsid({"check", "--model", write("alg3.json", spectral.dump()), "--frf", d}),
+                         {"field \"method\"", "is not pintelon2002-alg1, pintelon2002-alg1-bilinear, "
+                          "pintelon2002-alg1-orthogonal, pintelon2002-alg2-bilinear or pintelon2002-alg2-orthogonal"}));
   json cont = read_json("c.json");
   cont["domain"] = "continuous";
   cont["sample_time"] = 0;
