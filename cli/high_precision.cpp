@@ -142,8 +142,9 @@ int identify_spectrum_high(const std::string& json_path, const std::string& data
   j["data"] = data_path;
   j["precision"] = precision_label();
   if (json_path != "-") {
-    std::cout << "identified order " << res.order << " in high precision by " << to_string(vo ? Method::VanOverschee1997 : Method::Akcay2011)
-              << " from M = " << M << ", m = " << m << ", p = " << res.p << ", r = " << res.r << "\npoles:";
+    std::cout << "identified order " << res.order << " in high precision by "
+              << to_string(vo ? Method::VanOverschee1997 : Method::Akcay2011) << " from M = " << M << ", m = " << m
+              << ", p = " << res.p << ", r = " << res.r << "\npoles:";
     for (const auto& z : j["poles"]) {
       char buf[96];
       std::snprintf(buf, sizeof buf, "  %.15g%+.15gi", to_double(z[0]), to_double(z[1]));
@@ -175,7 +176,8 @@ int check(const std::string& json_path, const std::string& model_path, const std
     const std::string v = cj[key].is_string() ? cj[key].get<std::string>() : cj[key].dump();
     if (const auto value = from_name(names, v)) return *value;
     throw Error(ErrorKind::Input, model_path + " field \"" + key + "\"",
-                "\"" + v + "\" is not " + name_list(names) + (v.rfind("pintelon2002", 0) == 0 ? frf_hint : std::string()));
+                "\"" + v + "\" is not " + name_list(names) +
+                    (v.rfind("pintelon2002", 0) == 0 ? frf_hint : std::string()));
   };
   const Method method = spectrum_setting("method", method_names(), Method::Akcay2011,
                                          ": an FRF model; check it with --frf FRF.csv or --data RECORDS.csv --meta");
@@ -458,7 +460,8 @@ const NameTable<std::pair<Domain, const char*>>& frf_model_methods() {
   static const NameTable<std::pair<Domain, const char*>> names = [] {
     NameTable<std::pair<Domain, const char*>> t;
     for (const auto& [basis, m] : discrete_method_names())
-      t.push_back({frf_method_name(Domain::Discrete, ContinuousMethod::Bilinear, m), {Domain::Discrete, basis.c_str()}});
+      t.push_back(
+          {frf_method_name(Domain::Discrete, ContinuousMethod::Bilinear, m), {Domain::Discrete, basis.c_str()}});
     for (const auto& [basis, m] : continuous_method_names())
       t.push_back({frf_method_name(Domain::Continuous, m), {Domain::Continuous, basis.c_str()}});
     return t;

@@ -71,14 +71,16 @@ std::string frf_method_name(Domain domain, ContinuousMethod method, DiscreteMeth
 void set_frf_method(const std::string& name, Domain domain, FrfOptions& options) {
   // An empty name is the default: monomial (discrete), bilinear (continuous).
   if (domain == Domain::Discrete) {
-    const std::optional<DiscreteMethod> m = name.empty() ? DiscreteMethod::Monomial : from_name(discrete_method_names(), name);
+    const std::optional<DiscreteMethod> m =
+        name.empty() ? DiscreteMethod::Monomial : from_name(discrete_method_names(), name);
     if (!m)
       throw Error(ErrorKind::Input, "--method",
                   "\"" + name + "\" is not " + name_list(discrete_method_names()) + " (discrete time)");
     options.discrete = *m;
     return;
   }
-  const std::optional<ContinuousMethod> m = name.empty() ? ContinuousMethod::Bilinear : from_name(continuous_method_names(), name);
+  const std::optional<ContinuousMethod> m =
+      name.empty() ? ContinuousMethod::Bilinear : from_name(continuous_method_names(), name);
   if (m) {
     options.continuous = *m;
     return;
