@@ -444,10 +444,7 @@ void register_gap_validate(CLI::App& app, Action& chosen) {
   gval->add_option("--family", o.family,
                    "case family: classic (default), structure (lightly damped many-mode structures, noise rising with "
                    "frequency, a spring nonlinearity in the loop) or mixed (alternating cycles of 20)")
-      ->transform(choice(std::map<std::string, GapFamily>{{"classic", GapFamily::Classic},
-                                                          {"structure", GapFamily::Structure},
-                                                          {"mixed", GapFamily::Mixed}},
-                         "is not a family (classic, structure, mixed)"));
+      ->transform(choice(gap_family_names()));
   gval->add_flag("--continuous", o.continuous,
                  "continuous-time simulation models and true systems (the same draws; nonlinear stages on an 8x finer "
                  "grid, the record ideally sampled)");

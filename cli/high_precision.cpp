@@ -356,7 +356,7 @@ reference::FrfData reference_frf_file(const FrfHighRequest& q, const std::string
 }
 
 reference::FrfResult reference_frf(const FrfHighRequest& q, const reference::Real& perturbation, unsigned seed) {
-  const std::string domain = q.continuous ? "continuous" : "discrete";
+  const std::string domain = to_string(q.continuous ? Domain::Continuous : Domain::Discrete);
   const std::string where = q.frf_path.empty() ? q.data_path : q.frf_path;
   reference::FrfResult res;
   reference::Real sample_time = 1;

@@ -432,9 +432,7 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
       ->check(count_at_least(2));
   idf->add_option("--r-max", o.r_max, "upper end of the r search (default 6 n_a)")->check(count_at_least(2));
   idf->add_option("--domain", c->domain, "discrete (omega in rad/sample, default) or continuous (rad/s)")
-      ->transform(choice(std::map<std::string, Domain>{{"discrete", Domain::Discrete},
-                                                       {"continuous", Domain::Continuous}},
-                         "is neither discrete nor continuous"));
+      ->transform(choice(domain_names()));
   idf->add_option("--method", c->method,
                   "the basis: continuous time bilinear (Algorithm 2.1, default) or orthogonal (2.2); discrete time "
                   "monomial (Algorithm 1, default), bilinear or orthogonal (Algorithm 2.1 / 2.2 on the Tustin "
@@ -450,8 +448,7 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
                             "--data, --meta: the input noise is estimated over the periods)");
   auto* eiv_variance = idf->add_option("--eiv-variance", c->eiv_variance,
                   "data (the default: Eq. 31 from the noisy ratio) or model (re-evaluated at a first-pass model: consistent)")
-      ->transform(choice(std::map<std::string, EivVariance>{{"data", EivVariance::Data}, {"model", EivVariance::Model}},
-                         "is not data or model"));
+      ->transform(choice(eiv_variance_names()));
   auto* improper =
       idf->add_flag("--improper", c->improper,
                     "improper G: identify 1/G by swapping input and output (Section 5; needs --data, --meta)");

@@ -18,8 +18,6 @@ namespace fdsid::cli {
 
 namespace {
 
-const std::map<std::string, Domain> kDomains = {{"discrete", Domain::Discrete}, {"continuous", Domain::Continuous}};
-
 struct FrfCommand {
   std::string data_path, meta_path, out_path, json_path;
   RecordSelection selection;
@@ -143,8 +141,8 @@ void register_records(CLI::App& app, Action& chosen) {
   frf->add_option("--meta", f->meta_path, "meta JSON of the records")->required();
   frf->add_option("--out", f->out_path, "FRF CSV to write: omega,G_re,G_im,G_var")->check(output_path("--out"))->required();
   frf->add_option("--domain", f->domain, "discrete (omega in rad/sample) or continuous (rad/s)")
-      ->transform(choice(kDomains, "is neither discrete nor continuous"))
-      ->default_str("discrete");
+      ->transform(choice(domain_names()))
+      ->default_str(to_string(Domain::Discrete));
   add_json_option(frf, f->json_path, "write a record of what was written here (- = stdout)");
   add_record_selection_options(frf, f->selection);
   on_parsed(frf, f, chosen, run_frf);

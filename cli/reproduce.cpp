@@ -138,9 +138,7 @@ void register_table2(CLI::App* reproduce, Action& chosen) {
   t2->add_option("--extension", o.extension, "step 1 reading: conjugate (default: reproduces the paper) or hermitian-part")
       ->transform(choice(extension_names()));
   t2->add_option("--noise-variance", o.noise, "unit-complex (E|v|^2 = 1, default) or unit-per-component (E|v|^2 = 2)")
-      ->transform(choice(std::map<std::string, NoiseVariance>{{"unit-complex", NoiseVariance::UnitComplex},
-                                                              {"unit-per-component", NoiseVariance::UnitPerComponent}},
-                         "is not unit-complex or unit-per-component"));
+      ->transform(choice(noise_variance_names()));
   t2->add_option("--vo-epsilon", o.vo_epsilon, "noise level of the vo1997 runs (paper: 1e-9; 0 skips them)")
       ->check(finite_number(0, true))
       ->capture_default_str();

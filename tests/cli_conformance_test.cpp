@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <string>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
@@ -215,6 +217,18 @@ TEST_F(Conformance, BadInputIsRefusedBeforeAnyCandidateRuns) {
   std::ofstream(copy / "cases.json") << manifest.dump(1);
   EXPECT_TRUE(IsBadInput(run_fdsid({"conformance", "--suite", copy.string(), "--candidate", cand}),
                          {"differ from cases.json", "scripts/certify.sh"}));
+  // A misspelt setting in the manifest is named with the values it takes, never read as the default
+  // (an "eiv_variance" other than "model" was taken as "data").
+  manifest["cases"][0]["order"] = manifest["cases"][0]["order"].get<int>() - 1;
+  for (const auto& [field, value, refusal] : {std::tuple<std::string, std::string, std::string>{
+                                                  "eiv_variance", "modle", "use data or model"},
+                                              {"domain", "Discrete", "use discrete or continuous"}}) {
+    json bad = manifest;
+    bad["cases"][0][field] = value;
+    std::ofstream(copy / "cases.json") << bad.dump(1);
+    EXPECT_TRUE(IsBadInput(run_fdsid({"conformance", "--suite", copy.string(), "--candidate", cand}),
+                           {"field \"" + field + "\"", refusal}));
+  }
   EXPECT_FALSE(fs::exists(marker)) << "a candidate ran although the input was bad";
 }
 

@@ -100,10 +100,9 @@ CaseSpec spec_from_json(const json& j, const std::string& where) {
   if (s.r < 1 || (s.kind == CaseKind::Spectrum && s.p < 1))
     throw Error(ErrorKind::Input, g.where, "needs \"r\" (and \"p\" for a spectrum case)");
   const std::string method = g.text("method");
-  const std::string domain = g.text("domain", "discrete");
-  if (domain != "discrete" && domain != "continuous")
-    throw Error(ErrorKind::Input, g.where + " field \"domain\"", "use discrete or continuous");
-  s.domain = domain == "continuous" ? Domain::Continuous : Domain::Discrete;
+  const std::optional<Domain> domain = from_name(domain_names(), g.text("domain", to_string(Domain::Discrete)));
+  if (!domain) throw Error(ErrorKind::Input, g.where + " field \"domain\"", "use " + name_list(domain_names()));
+  s.domain = *domain;
   if (s.kind == CaseKind::Spectrum) {
     const std::optional<Method> m = from_name(method_names(), method);
     if (!m) throw Error(ErrorKind::Input, g.where + " field \"method\"", "a spectrum case uses " + name_list(method_names()));
@@ -126,7 +125,11 @@ CaseSpec spec_from_json(const json& j, const std::string& where) {
     throw Error(ErrorKind::Input, g.where + " field \"treatment\"", "use plain or eiv");
   if (s.treatment != RecordTreatment::Plain && s.kind != CaseKind::Records)
     throw Error(ErrorKind::Input, g.where, "errors-in-variables needs a records case");
-  s.eiv_variance = g.text("eiv_variance", "data") == "model" ? EivVariance::Model : EivVariance::Data;
+  const std::optional<EivVariance> eiv_variance =
+      from_name(eiv_variance_names(), g.text("eiv_variance", name_of(eiv_variance_names(), EivVariance::Data)));
+  if (!eiv_variance)
+    throw Error(ErrorKind::Input, g.where + " field \"eiv_variance\"", "use " + name_list(eiv_variance_names()));
+  s.eiv_variance = *eiv_variance;
   s.min_input_snr = g.number("min_input_snr", 10);
   return s;
 }
@@ -246,7 +249,7 @@ std::string CaseSpec::fdsid_arguments(const std::string& suite) const {
     a += std::string(" --method ") + to_string(continuous_method) + " --omega-scale " + fmt(omega_scale, 17);
   if (treatment == RecordTreatment::ErrorsInVariables) {
     a += " --eiv";
-    if (eiv_variance == EivVariance::Model) a += " --eiv-variance model";
+    if (eiv_variance != EivVariance::Data) a += std::string(" --eiv-variance ") + name_of(eiv_variance_names(), eiv_variance);
   }
   return a;
 }

@@ -1395,7 +1395,7 @@ void write_truth(const GapCaseOptions& o, const Base& base, const Setting& st, c
   for (Effect e : o.effects) t["effects"].push_back(to_string(e));
   t["strength"] = effects.empty() ? "none" : to_string(o.strength);
   t["family"] = o.structure ? "structure" : "classic";
-  t["domain"] = o.continuous ? "continuous" : "discrete";
+  t["domain"] = to_string(o.continuous ? Domain::Continuous : Domain::Discrete);
   t["seed"] = o.seed;
   t["period"] = st.P;
   t["periods"] = st.M;

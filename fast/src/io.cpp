@@ -191,13 +191,13 @@ StateSpace model_from_json(const nlohmann::json& j, const std::string& where) {
   // Both fields are part of the model (the contracts' model format): a model
   // without them used to be taken silently as discrete with Ts = 1, and a
   // continuous-time model without "domain" then as an unstable discrete one.
-  if (!j.contains("domain"))
-    input_error(where + " field \"domain\"", "is missing: add \"domain\": \"discrete\" or \"continuous\"");
-  if (!j["domain"].is_string()) input_error(where + " field \"domain\"", "must be \"discrete\" or \"continuous\"");
+  const std::string domains = name_list(domain_names(), "\"");
+  if (!j.contains("domain")) input_error(where + " field \"domain\"", "is missing: add \"domain\": " + domains);
+  if (!j["domain"].is_string()) input_error(where + " field \"domain\"", "must be " + domains);
   const std::string d = j["domain"];
-  if (d == "discrete") m.domain = Domain::Discrete;
-  else if (d == "continuous") m.domain = Domain::Continuous;
-  else input_error(where + " field \"domain\"", "\"" + d + "\" is neither \"discrete\" nor \"continuous\"");
+  const std::optional<Domain> domain = from_name(domain_names(), d);
+  if (!domain) input_error(where + " field \"domain\"", "\"" + d + "\" is not " + domains);
+  m.domain = *domain;
   if (j.contains("sample_time")) m.sample_time = number_from_json(j["sample_time"], where + " field \"sample_time\"");
   else if (m.domain == Domain::Discrete)
     input_error(where + " field \"sample_time\"",

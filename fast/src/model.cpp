@@ -14,7 +14,12 @@
 
 namespace fdsid {
 
-const char* to_string(Domain d) { return d == Domain::Discrete ? "discrete" : "continuous"; }
+const NameTable<Domain>& domain_names() {
+  static const NameTable<Domain> names = {{"discrete", Domain::Discrete}, {"continuous", Domain::Continuous}};
+  return names;
+}
+
+const char* to_string(Domain d) { return name_of(domain_names(), d); }
 
 void validate(const StateSpace& m, const std::string& where) {
   const auto n = m.A.rows();

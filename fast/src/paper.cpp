@@ -66,9 +66,13 @@ cplx akcay_noise_filter(cplx z) {
   return (0.2 * z * z - 0.0904 * z + 0.1839) / (z * z - 1.1111 * z + 0.8520);
 }
 
-const char* to_string(NoiseVariance v) {
-  return v == NoiseVariance::UnitComplex ? "unit-complex" : "unit-per-component";
+const NameTable<NoiseVariance>& noise_variance_names() {
+  static const NameTable<NoiseVariance> names = {{"unit-complex", NoiseVariance::UnitComplex},
+                                                 {"unit-per-component", NoiseVariance::UnitPerComponent}};
+  return names;
 }
+
+const char* to_string(NoiseVariance v) { return name_of(noise_variance_names(), v); }
 
 std::vector<Table1Row> reproduce_table1(const std::vector<int>& Ms) {
   const StateSpace sys = akcay_example_system();

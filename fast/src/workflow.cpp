@@ -12,6 +12,11 @@
 
 namespace fdsid {
 
+const NameTable<EivVariance>& eiv_variance_names() {
+  static const NameTable<EivVariance> names = {{"data", EivVariance::Data}, {"model", EivVariance::Model}};
+  return names;
+}
+
 void require_sample_subspace_periods(const RecordMeta& meta, const std::string& meta_path,
                                      const RecordSelection& selection) {
   // Review finding 8 of stop 47: --skip-periods 7 of 8 blamed the meta's "periods".

@@ -27,12 +27,15 @@
 
 #include "fdsid/gap.hpp"
 #include "fdsid/gap_cases.hpp"
+#include "fdsid/names.hpp"
 
 namespace fdsid {
 
 enum class GapFamily { Classic, Structure, Mixed };
 
 /// "classic", "structure", "mixed".
+/// "classic", "structure", "mixed" (gap-validate --family).
+const NameTable<GapFamily>& gap_family_names();
 const char* to_string(GapFamily family);
 
 struct GapValidationOptions {

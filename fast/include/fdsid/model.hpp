@@ -7,12 +7,16 @@
 
 #include <Eigen/Dense>
 
+#include "fdsid/names.hpp"
+
 namespace fdsid {
 
 using cplx = std::complex<double>;
 
 enum class Domain { Discrete, Continuous };
 
+/// "discrete", "continuous": the model format's "domain", the CLI's --domain.
+const NameTable<Domain>& domain_names();
 const char* to_string(Domain d);
 
 /// x[t+1] = A x[t] + B u[t], y[t] = C x[t] + D u[t] (discrete), or

@@ -29,12 +29,13 @@ const char* name_of(const NameTable<E>& names, E value) {
   return "";
 }
 
-/// The names as a sentence lists them: "a", "a or b", "a, b or c".
+/// The names as a sentence lists them: "a", "a or b", "a, b or c"; each
+/// between `quote`s when given (a JSON field's values: "\"a\" or \"b\"").
 template <class E>
-std::string name_list(const NameTable<E>& names) {
+std::string name_list(const NameTable<E>& names, const std::string& quote = "") {
   std::string list;
   for (size_t i = 0; i < names.size(); ++i)
-    list += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i].first;
+    list += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + quote + names[i].first + quote;
   return list;
 }
 

@@ -9,6 +9,7 @@
 
 #include "fdsid/frf_id.hpp"
 #include "fdsid/model.hpp"
+#include "fdsid/names.hpp"
 #include "fdsid/spectrum_id.hpp"
 
 namespace fdsid {
@@ -42,6 +43,8 @@ enum class NoiseVariance {
   /// Re v and Im v each N(0, 1), so E|v|^2 = 2 ("unit variance" read per component).
   UnitPerComponent
 };
+/// "unit-complex", "unit-per-component" (reproduce table2 --noise-variance).
+const NameTable<NoiseVariance>& noise_variance_names();
 const char* to_string(NoiseVariance v);
 
 struct Table2Options {

@@ -13,6 +13,7 @@
 #include "fdsid/frf_id.hpp"
 #include "fdsid/io.hpp"
 #include "fdsid/model.hpp"
+#include "fdsid/names.hpp"
 #include "fdsid/spectrum_id.hpp"
 
 namespace fdsid {
@@ -40,6 +41,8 @@ enum class EivVariance {
   Data,   ///< Eq. (31) from the noisy ratio Ĝ (one pass)
   Model   ///< Eq. (31) at a first-pass model (second pass: consistent weight)
 };
+/// "data", "model" (identify-frf --eiv-variance, the certified cases' "eiv_variance").
+const NameTable<EivVariance>& eiv_variance_names();
 
 /// Where identify-frf's data came from and how they were treated: the
 /// "source" object of its JSON (fdsid/json.hpp).
