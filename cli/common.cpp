@@ -17,7 +17,7 @@
 
 namespace fdsid::cli {
 
-const std::map<std::string, Precision> kPrecisions = {{"double", Precision::Double}, {"high", Precision::High}};
+const NameTable<Precision> kPrecisions = {{"double", Precision::Double}, {"high", Precision::High}};
 
 bool unknown_subcommand(const CLI::App& app, int argc, char** argv) {
   auto find = [](const CLI::App& parent, const std::string& word) -> const CLI::App* {

@@ -85,7 +85,7 @@ CLI::Validator choice(const NameTable<E>& names) {
   return choice(std::map<std::string, E>(names.begin(), names.end()), "is not " + name_list(names));
 }
 
-extern const std::map<std::string, Precision> kPrecisions;  // double, high
+extern const NameTable<Precision> kPrecisions;  // double, high
 
 /// --order: a positive integer (<= 1000) or auto (stored as 0).
 CLI::Validator order_value();

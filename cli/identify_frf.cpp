@@ -442,7 +442,7 @@ void register_identify_frf(CLI::App& app, Action& chosen) {
                   "in (0, pi), default 2 atan sqrt(tan(w_min/2) tan(w_max/2)))")
       ->check(finite_number(0, false));
   idf->add_option("--precision", c->precision, "double (default) or high")
-      ->transform(choice(kPrecisions, "is not double or high"));
+      ->transform(choice(kPrecisions));
   auto* eiv = idf->add_flag("--eiv", c->eiv,
                             "noisy input: identify from G = Y/U with the variance of Eq. (31) (Section 5; needs "
                             "--data, --meta: the input noise is estimated over the periods)");

@@ -118,7 +118,7 @@ void register_identify_spectrum(CLI::App& app, Action& chosen) {
   ids->add_option("--method", o.method, "akcay2011 (default) or vo1997")
       ->transform(choice(method_names()));
   ids->add_option("--precision", c->precision, "double (default) or high")
-      ->transform(choice(kPrecisions, "is not double or high"));
+      ->transform(choice(kPrecisions));
   ids->add_option("--extension", o.extension, "step 1 reading: hermitian-part (default) or conjugate")
       ->transform(choice(extension_names()));
   ids->add_flag("--refine", c->refine,

@@ -103,7 +103,7 @@ void register_sample_spectrum(CLI::App& app, Action& chosen) {
   smp->add_option("--out", c->out_path, "CSV output (- = stdout, the default)")->check(output_path("--out"));
   add_json_option(smp, c->json_path, "write what was sampled here (- = stdout, with --out FILE)");
   smp->add_option("--precision", c->precision, "double (default) or high (50-digit reference, 40 digits written)")
-      ->transform(choice(kPrecisions, "is not double or high"));
+      ->transform(choice(kPrecisions));
   on_parsed(smp, c, chosen, run);
 }
 

@@ -66,6 +66,14 @@ struct Fields {
       throw Error(ErrorKind::Input, where + " field \"" + key + "\"", "must be a positive number");
     return j[key].get<double>();
   }
+  // A value of `names` (`none` when the field is absent); else refused with
+  // the names, after `use`.
+  template <class E>
+  E named(const char* key, const NameTable<E>& names, std::optional<E> none, const std::string& use = "use ") const {
+    const std::optional<E> e = has(key) ? from_name(names, text(key)) : none;
+    if (!e) throw Error(ErrorKind::Input, where + " field \"" + key + "\"", use + name_list(names));
+    return *e;
+  }
 };
 
 CaseSpec spec_from_json(const json& j, const std::string& where) {
@@ -100,20 +108,12 @@ CaseSpec spec_from_json(const json& j, const std::string& where) {
   if (s.r < 1 || (s.kind == CaseKind::Spectrum && s.p < 1))
     throw Error(ErrorKind::Input, g.where, "needs \"r\" (and \"p\" for a spectrum case)");
   const std::string method = g.text("method");
-  const std::optional<Domain> domain = from_name(domain_names(), g.text("domain", to_string(Domain::Discrete)));
-  if (!domain) throw Error(ErrorKind::Input, g.where + " field \"domain\"", "use " + name_list(domain_names()));
-  s.domain = *domain;
+  s.domain = g.named<Domain>("domain", domain_names(), Domain::Discrete);
   if (s.kind == CaseKind::Spectrum) {
-    const std::optional<Method> m = from_name(method_names(), method);
-    if (!m) throw Error(ErrorKind::Input, g.where + " field \"method\"", "a spectrum case uses " + name_list(method_names()));
-    s.spectrum_method = *m;
+    s.spectrum_method = g.named<Method>("method", method_names(), {}, "a spectrum case uses ");
     if (s.domain != Domain::Discrete) throw Error(ErrorKind::Input, g.where, "a spectrum case is discrete");
   } else if (s.domain == Domain::Continuous) {
-    const std::optional<ContinuousMethod> m = from_name(continuous_method_names(), method);
-    if (!m)
-      throw Error(ErrorKind::Input, g.where + " field \"method\"",
-                  "a continuous case uses " + name_list(continuous_method_names()));
-    s.continuous_method = *m;
+    s.continuous_method = g.named<ContinuousMethod>("method", continuous_method_names(), {}, "a continuous case uses ");
     s.omega_scale = g.number("omega_scale", 0);
     if (s.omega_scale <= 0) throw Error(ErrorKind::Input, g.where, "a continuous case gives \"omega_scale\"");
   } else if (method != "discrete") {
@@ -125,11 +125,7 @@ CaseSpec spec_from_json(const json& j, const std::string& where) {
     throw Error(ErrorKind::Input, g.where + " field \"treatment\"", "use plain or eiv");
   if (s.treatment != RecordTreatment::Plain && s.kind != CaseKind::Records)
     throw Error(ErrorKind::Input, g.where, "errors-in-variables needs a records case");
-  const std::optional<EivVariance> eiv_variance =
-      from_name(eiv_variance_names(), g.text("eiv_variance", name_of(eiv_variance_names(), EivVariance::Data)));
-  if (!eiv_variance)
-    throw Error(ErrorKind::Input, g.where + " field \"eiv_variance\"", "use " + name_list(eiv_variance_names()));
-  s.eiv_variance = *eiv_variance;
+  s.eiv_variance = g.named<EivVariance>("eiv_variance", eiv_variance_names(), EivVariance::Data);
   s.min_input_snr = g.number("min_input_snr", 10);
   return s;
 }
