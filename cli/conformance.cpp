@@ -165,7 +165,7 @@ CaseRun run_case(const CertifiedCase& c, const std::string& command_template, co
                   : s.domain == Domain::Continuous ? to_string(s.continuous_method)
                                                    : "discrete"},
        {"omega_scale", s.omega_scale > 0 ? fmt(s.omega_scale, 17) : ""},
-       {"treatment", s.treatment == RecordTreatment::ErrorsInVariables ? "eiv" : "plain"}, {"out", out},
+       {"treatment", name_of(case_treatment_names(), s.treatment)}, {"out", out},
        {"fdsid_args", s.fdsid_arguments(suite)}, {"suite", suite}});
   const std::string err_path = work + "/" + s.name + ".stderr";
   run.outcome = run_command(run.command, work + "/" + s.name + ".stdout", err_path, timeout);

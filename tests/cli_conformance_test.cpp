@@ -222,7 +222,9 @@ TEST_F(Conformance, BadInputIsRefusedBeforeAnyCandidateRuns) {
   manifest["cases"][0]["order"] = manifest["cases"][0]["order"].get<int>() - 1;
   for (const auto& [field, value, refusal] : {std::tuple<std::string, std::string, std::string>{
                                                   "eiv_variance", "modle", "use data or model"},
-                                              {"domain", "Discrete", "use discrete or continuous"}}) {
+                                              {"domain", "Discrete", "use discrete or continuous"},
+                                              {"treatment", "EIV", "use plain or eiv"},
+                                              {"kind", "FRF", "use spectrum, frf or records"}}) {
     json bad = manifest;
     bad["cases"][0][field] = value;
     std::ofstream(copy / "cases.json") << bad.dump(1);

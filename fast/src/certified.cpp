@@ -19,13 +19,18 @@ namespace fdsid {
 
 using nlohmann::json;
 
-const char* to_string(CaseKind k) {
-  switch (k) {
-    case CaseKind::Spectrum: return "spectrum";
-    case CaseKind::Frf: return "frf";
-    case CaseKind::Records: return "records";
-  }
-  return "?";
+const NameTable<CaseKind>& case_kind_names() {
+  static const NameTable<CaseKind> names = {
+      {"spectrum", CaseKind::Spectrum}, {"frf", CaseKind::Frf}, {"records", CaseKind::Records}};
+  return names;
+}
+
+const char* to_string(CaseKind k) { return name_of(case_kind_names(), k); }
+
+const NameTable<RecordTreatment>& case_treatment_names() {
+  static const NameTable<RecordTreatment> names = {{"plain", RecordTreatment::Plain},
+                                                   {"eiv", RecordTreatment::ErrorsInVariables}};
+  return names;
 }
 
 namespace {
@@ -84,11 +89,8 @@ CaseSpec spec_from_json(const json& j, const std::string& where) {
   s.tier = g.required_text("tier");
   if (s.tier != "lower" && s.tier != "average" && s.tier != "higher")
     throw Error(ErrorKind::Input, g.where + " field \"tier\"", "is \"" + s.tier + "\"; use lower, average or higher");
-  const std::string kind = g.required_text("kind");
-  if (kind == "spectrum") s.kind = CaseKind::Spectrum;
-  else if (kind == "frf") s.kind = CaseKind::Frf;
-  else if (kind == "records") s.kind = CaseKind::Records;
-  else throw Error(ErrorKind::Input, g.where + " field \"kind\"", "is \"" + kind + "\"; use spectrum, frf or records");
+  g.required_text("kind");  // absent: "has no "kind"", as the other required fields
+  s.kind = g.named<CaseKind>("kind", case_kind_names(), {});
   s.description = g.text("description");
   s.made_by = g.text("made_by");
   s.data = g.text("data");
@@ -119,10 +121,7 @@ CaseSpec spec_from_json(const json& j, const std::string& where) {
   } else if (method != "discrete") {
     throw Error(ErrorKind::Input, g.where + " field \"method\"", "a discrete FRF/records case uses \"discrete\"");
   }
-  const std::string treatment = g.text("treatment", "plain");
-  if (treatment == "eiv") s.treatment = RecordTreatment::ErrorsInVariables;
-  else if (treatment != "plain")
-    throw Error(ErrorKind::Input, g.where + " field \"treatment\"", "use plain or eiv");
+  s.treatment = g.named<RecordTreatment>("treatment", case_treatment_names(), RecordTreatment::Plain);
   if (s.treatment != RecordTreatment::Plain && s.kind != CaseKind::Records)
     throw Error(ErrorKind::Input, g.where, "errors-in-variables needs a records case");
   s.eiv_variance = g.named<EivVariance>("eiv_variance", eiv_variance_names(), EivVariance::Data);
@@ -145,7 +144,7 @@ json case_inputs_json(const CaseSpec& s) {
     j["domain"] = to_string(s.domain);
     j["method"] = s.domain == Domain::Continuous ? to_string(s.continuous_method) : "discrete";
     if (s.domain == Domain::Continuous) j["omega_scale"] = s.omega_scale;
-    j["treatment"] = s.treatment == RecordTreatment::ErrorsInVariables ? "eiv" : "plain";
+    j["treatment"] = name_of(case_treatment_names(), s.treatment);
   }
   return j;
 }

@@ -12,6 +12,7 @@
 
 #include "fdsid/compare.hpp"
 #include "fdsid/model.hpp"
+#include "fdsid/names.hpp"
 #include "fdsid/spectrum_id.hpp"
 #include "fdsid/workflow.hpp"
 
@@ -23,6 +24,12 @@ enum class CaseKind {
   Records    ///< Pintelon (2002) on periodic records (sample mean and variance, Section 4.1/5)
 };
 const char* to_string(CaseKind k);
+/// The manifest's "kind" names: spectrum, frf, records.
+const NameTable<CaseKind>& case_kind_names();
+/// The manifest's "treatment" names of a records case: plain (Section 4.1) or
+/// eiv (errors in variables, identify-frf --eiv). No certified case treats an
+/// improper G, so RecordTreatment::Improper has no name here.
+const NameTable<RecordTreatment>& case_treatment_names();
 
 /// One case of the suite's manifest (cases.json): what was identified, how.
 /// Paths are as the manifest gives them, relative to the suite folder.
