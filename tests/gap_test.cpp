@@ -15,6 +15,7 @@
 
 #include "fdsid/error.hpp"
 #include "fdsid/gap.hpp"
+#include "fdsid/format.hpp"
 #include "fdsid/gap_cases.hpp"
 #include "fdsid/model.hpp"
 #include "fdsid/paper.hpp"
@@ -672,6 +673,47 @@ TEST(GapDiagnosis, AGapBelowTheNoiseIsTheLowerTailOfTheGapTest) {
       EXPECT_LT(r.p_below, 1e-6) << r.gap_after;
     }
   }
+}
+
+// Issue 17: an unexplained gap must not hide a candidate that explains it
+// better. gap-validate --family structure seed 1, case 34 (seed 1000037): a
+// subtle cubic fed back from the output (Duffing-type). Its distortion on the
+// 87 unexcited lines tests p 0.059 (on its 17 odd detection lines alone
+// 2.6e-4; taking the smaller of the odd and even lines' p, Bonferroni, admitted
+// it here but cost 6 verdicts in 600 blind cases: false nonlinearities beside
+// unmodelled modes, a missed quadratic), so the selection does not admit it
+// and chooses unmodelled_mode + mode_mismatch, gap 4.25; the cubic alone leaves
+// 1.09. The report names it in a note, with its gap and its test's p from the
+// report's own candidates, and only because it is lower by more than the
+// noise bound the note states (3 null sd of the gap). Should the selection
+// come to admit this nonlinearity, this case no longer shows the note and
+// another must take its place.
+TEST(GapDiagnosis, AnUnexplainedGapNamesABetterCandidateItsTestKeptOut) {
+  GapCaseOptions o;
+  o.effects = {Effect::Nonlinearity};
+  o.strength = Strength::Subtle;
+  o.structure = true;
+  o.seed = 1000037;
+  const GapCase c = make_gap_case(o);
+  const GapReport r = diagnose_gap(c.sim_model, c.record, 1, c.meta);
+  SCOPED_TRACE(verdict(r));
+  ASSERT_EQ(r.verdict, GapVerdict::Unexplained);
+  const auto nl = std::find_if(r.candidates.begin(), r.candidates.end(),
+                               [](const EffectFit& f) { return f.effect() == Effect::Nonlinearity; });
+  ASSERT_NE(nl, r.candidates.end());
+  const double bound = 3 * gap_null_sd(c.meta.periods, r.excited);
+  ASSERT_LT(nl->gap_after, r.gap_after - bound);
+  ASSERT_GE(nl->p_value, r.options.alpha);
+  const std::string expected = "nonlinearity alone would leave gap " + sci(nl->gap_after, 4) + ", less than the " +
+                               sci(r.gap_after, 4) + " the effects found leave, but its own test does not admit it (p " +
+                               sci(nl->p_value, 3) + " at level 0.01)";
+  EXPECT_EQ(std::count_if(r.notes.begin(), r.notes.end(),
+                          [&](const std::string& n) { return n.find(expected) == 0; }),
+            1);
+  // No other candidate is named: each is either chosen, admitted by its test, or no better.
+  EXPECT_EQ(std::count_if(r.notes.begin(), r.notes.end(),
+                          [](const std::string& n) { return n.find(" alone would leave gap ") != std::string::npos; }),
+            1);
 }
 
 TEST(GapDiagnosis, ASubtleTransientInColouredNoiseIsLeakage) {
