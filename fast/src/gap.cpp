@@ -1618,6 +1618,11 @@ EffectFit leakage_alone(const Spectra& s, const Augment& a0, int drop, double p_
   return {gap_of(line_stats(s, a, s.exc)), 0, 0, p_leakage, Leakage{a.first}};
 }
 
+// The level at which an effect's own test admits it (ForwardSelection::admit):
+// alpha for the nonlinearity's test on the unexcited lines, effect_alpha for
+// the leakage test and the linear effects' F-tests.
+double admission_level(Effect e, const GapOptions& o) { return e == Effect::Nonlinearity ? o.alpha : o.effect_alpha; }
+
 // One stage of the forward selection: a set of effects fitted jointly on the
 // model as given — linear effects (Diagnosis::fit_set, in kAllEffects' order),
 // the transient periods dropped (leakage), the nonlinear distortion refitted
@@ -1768,12 +1773,12 @@ class ForwardSelection {
     if (e == Effect::Leakage) {
       if (drop_ == 0) return {};
       p = dg_.leakage_p(cur.state, 0);
-      if (!(p < o_.effect_alpha)) return {};
+      if (!(p < admission_level(e, o_))) return {};
       next.first = drop_;
     } else if (e == Effect::Nonlinearity) {
       if (s_.ne.size() < 4) return {};
       p = fisher_p(line_stats(s_, cur.state, s_.ne).t, s_.M - cur.first);
-      if (!(p < o_.alpha)) return {};
+      if (!(p < admission_level(e, o_))) return {};
       next.nonlinear = true;
       next.p_nonlinear = p;
     } else {
@@ -1795,7 +1800,7 @@ class ForwardSelection {
       // q ≤ 0 would make the test say p = 1 for any decrease (as exchanged()).
       const int q = std::max(1, next.q - cur.q);
       p = dg_.searched_p(e, dg_.f_test(cur.V, next.V, q, next.q));
-      next.admitted = next.admitted && p < o_.effect_alpha && relevant(cur.gap, next.gap, floor(cur));
+      next.admitted = next.admitted && p < admission_level(e, o_) && relevant(cur.gap, next.gap, floor(cur));
     }
     for (EffectFit& f : next.fits)
       if (f.effect() == e) f.p_value = p;
@@ -2090,12 +2095,16 @@ void conclude(const Spectra& s, const LineStats& st0, const Augment& a0, const A
   // chosen unmodelled_mode + mode_mismatch 4.25; the cubic's distortion on
   // the unexcited lines tests p 0.059).
   if (rep.verdict == GapVerdict::Unexplained) {
-    const double bound = gap_noise_bound(st1.M, static_cast<int>(K));
+    // The bound only for a candidate that could be named: with fewer than 4
+    // periods it is a Monte Carlo of 20000 K draws.
+    std::optional<double> bound;
     for (const EffectFit& c : rep.candidates) {
-      const double level = c.effect() == Effect::Nonlinearity ? options.alpha : options.effect_alpha;
+      const double level = admission_level(c.effect(), options);
       const bool chosen = std::any_of(rep.chosen.begin(), rep.chosen.end(),
                                       [&](const EffectFit& f) { return f.effect() == c.effect(); });
-      if (chosen || !(c.p_value >= level) || !(c.gap_after < rep.gap_after - bound)) continue;
+      if (chosen || !(c.p_value >= level) || !(c.gap_after < rep.gap_after)) continue;
+      if (!bound) bound = gap_noise_bound(st1.M, static_cast<int>(K));
+      if (!(c.gap_after < rep.gap_after - *bound)) continue;
       rep.notes.push_back(
           std::string(to_string(c.effect())) + " alone would leave gap " + sci(c.gap_after, 4) + ", less than the " +
           sci(rep.gap_after, 4) + (rep.present.empty() ? " of the model as given" : " the effects found leave") +
