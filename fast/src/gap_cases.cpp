@@ -23,6 +23,14 @@ const char* to_string(Strength s) {
   return "?";
 }
 
+const NameTable<GapFamily>& gap_family_names() {
+  static const NameTable<GapFamily> names = {
+      {"classic", GapFamily::Classic}, {"structure", GapFamily::Structure}, {"mixed", GapFamily::Mixed}};
+  return names;
+}
+
+const char* to_string(GapFamily family) { return name_of(gap_family_names(), family); }
+
 std::array<double, 2> gap_ratio_range(Strength s) {
   switch (s) {
     case Strength::Subtle: return {0.5, 3.0};
@@ -1394,7 +1402,7 @@ void write_truth(const GapCaseOptions& o, const Base& base, const Setting& st, c
   t["effects"] = json::array();
   for (Effect e : o.effects) t["effects"].push_back(to_string(e));
   t["strength"] = effects.empty() ? "none" : to_string(o.strength);
-  t["family"] = o.structure ? "structure" : "classic";
+  t["family"] = to_string(o.structure ? GapFamily::Structure : GapFamily::Classic);
   t["domain"] = to_string(o.continuous ? Domain::Continuous : Domain::Discrete);
   t["seed"] = o.seed;
   t["period"] = st.P;

@@ -238,14 +238,6 @@ bool gap_validation_targets_met(const GapValidation& v) {
          ok(v.false_alarm_rate, kTargetFalseAlarms, false) && ok(share_at_most_2(v), 1.0, true);
 }
 
-const NameTable<GapFamily>& gap_family_names() {
-  static const NameTable<GapFamily> names = {
-      {"classic", GapFamily::Classic}, {"structure", GapFamily::Structure}, {"mixed", GapFamily::Mixed}};
-  return names;
-}
-
-const char* to_string(GapFamily family) { return name_of(gap_family_names(), family); }
-
 nlohmann::json gap_validation_to_json(const GapValidation& v) {
   nlohmann::json j;
   j["cases"] = v.cases;

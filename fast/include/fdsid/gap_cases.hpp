@@ -120,10 +120,19 @@
 #include "fdsid/frf_id.hpp"
 #include "fdsid/gap.hpp"
 #include "fdsid/model.hpp"
+#include "fdsid/names.hpp"
 
 namespace fdsid {
 
 enum class Strength { None, Subtle, Clear };
+
+/// The generators' families (above): Classic and Structure each one kind of
+/// case; Mixed (gap-validate) alternates them in blocks of 20 cases.
+enum class GapFamily { Classic, Structure, Mixed };
+
+/// "classic", "structure", "mixed" (gap-validate --family, the truth's "family").
+const NameTable<GapFamily>& gap_family_names();
+const char* to_string(GapFamily family);
 
 /// Noise periods cut from a measured periodic record (see above), y_m the
 /// record's m-th period of one column: each group of four consecutive periods

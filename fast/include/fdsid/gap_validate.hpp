@@ -31,12 +31,6 @@
 
 namespace fdsid {
 
-enum class GapFamily { Classic, Structure, Mixed };
-
-/// "classic", "structure", "mixed" (gap-validate --family).
-const NameTable<GapFamily>& gap_family_names();
-const char* to_string(GapFamily family);
-
 struct GapValidationOptions {
   int cases = 100;
   GapFamily family = GapFamily::Classic;
