@@ -1,4 +1,4 @@
-# fdsid_discover_tests(TARGET LABELS l1;l2;... [WORKING_DIRECTORY dir] [SLOW test1 ...] [LONG test1 ...])
+# fdsid_discover_tests(TARGET LABELS l1;l2;... [WORKING_DIRECTORY dir] [SLOW_ONLY] [SLOW test1 ...] [LONG test1 ...])
 #
 # gtest_discover_tests with a list of ctest labels. gtest_discover_tests
 # (CMake 3.25) flattens list-valued PROPERTIES ("LABELS a;b" becomes LABELS = a
@@ -9,6 +9,12 @@
 # build (Monte Carlo loops, the 50-digit reference at -O1 under ASan): they get
 # the label `slow` instead of `quick`, so the Release run of the whole suite
 # runs them and the sanitizer/coverage run (`ctest -L quick`) does not.
+#
+# SLOW_ONLY: every test of TARGET is in SLOW. Such a binary is built only with
+# FDSID_BUILD_SLOW_ONLY_TESTS (CMakeLists.txt; the sanitizer/coverage stage of
+# scripts/test-all.sh turns it off, since it runs no slow test); a test that
+# is not in SLOW then fails the test discovery, so a quick test added to such
+# a binary cannot silently go unrun by that stage.
 #
 # LONG names quick tests that take a large share of the sanitizer/coverage run
 # (FrfConsistency.GErrorShrinksLikeOneOverSqrtF: ~150 s of a ~500 s·proc
@@ -26,7 +32,7 @@
 # reproduces it.
 include(GoogleTest)
 function(fdsid_discover_tests target)
-  cmake_parse_arguments(ARG "" "WORKING_DIRECTORY" "LABELS;SLOW;LONG" ${ARGN})
+  cmake_parse_arguments(ARG "SLOW_ONLY" "WORKING_DIRECTORY" "LABELS;SLOW;LONG" ${ARGN})
   if(NOT ARG_WORKING_DIRECTORY)
     set(ARG_WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
   endif()
@@ -36,6 +42,13 @@ function(fdsid_discover_tests target)
   list(REMOVE_ITEM slow_labels quick)
   list(APPEND slow_labels slow)
   set(file ${CMAKE_CURRENT_BINARY_DIR}/${target}_labels.cmake)
+  set(slow_only_check "")
+  if(ARG_SLOW_ONLY)
+    string(CONCAT slow_only_check
+      "    if(i EQUAL -1)\n"
+      "      message(FATAL_ERROR \"fdsid_discover_tests(${target}): SLOW_ONLY, but \${t} is not in SLOW: name it there or move it to a binary with quick tests\")\n"
+      "    endif()\n")
+  endif()
   # LABELS set twice on one test accumulate here, so each test is set once.
   file(WRITE ${file}
     "if(DEFINED ${target}_TESTS)\n"
@@ -50,6 +63,7 @@ function(fdsid_discover_tests target)
     "  foreach(t IN LISTS ${target}_TESTS)\n"
     "    set_tests_properties(\${t} PROPERTIES TIMEOUT 600)\n"
     "    list(FIND slow \${t} i)\n"
+    "${slow_only_check}"
     "    if(i EQUAL -1)\n"
     "      set_tests_properties(\${t} PROPERTIES LABELS \"${labels}\")\n"
     "    else()\n"

@@ -15,7 +15,8 @@
 #     user's build/ (README's first command) stays -O3 and is not touched.
 #  2. One build with coverage AND AddressSanitizer + UndefinedBehaviorSanitizer
 #     (-fno-sanitize-recover=all, -O1; every UBSan check but `null` and
-#     `alignment`, which ASan answers: CMakeLists.txt) of everything but the benchmarks, which
+#     `alignment`, which ASan answers: CMakeLists.txt) of everything but the benchmarks
+#     and the test binaries that hold only `slow` tests (FDSID_BUILD_SLOW_ONLY_TESTS=OFF), which
 #     runs the `quick` label (every other test) and checks the 90 % line
 #     threshold on fast/ and reference/ (coverage/CMakeLists.txt; LeakSanitizer
 #     suppressions for fontconfig and libltdl only: coverage/lsan.supp).
@@ -52,7 +53,8 @@ t_rel_build=$(date +%s)
 ctest --test-dir build-o1 --output-on-failure -j2 -L 'slow|docs|install'
 t_rel_test=$(date +%s)
 
-cmake -S . -B build-cov $(ninja_if_new build-cov) -DFDSID_COVERAGE=ON -DFDSID_SANITIZE=ON -DFDSID_BUILD_TESTS=ON -DFDSID_BUILD_BENCH=OFF
+cmake -S . -B build-cov $(ninja_if_new build-cov) -DFDSID_COVERAGE=ON -DFDSID_SANITIZE=ON -DFDSID_BUILD_TESTS=ON -DFDSID_BUILD_BENCH=OFF \
+  -DFDSID_BUILD_SLOW_ONLY_TESTS=OFF
 cmake --build build-cov -j2
 t_cov_build=$(date +%s)
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
