@@ -1721,10 +1721,12 @@ class ForwardSelection {
       std::array<std::optional<Stage>, kAllEffects.size()> tried;
       on_two_workers(tried.size(), [&](size_t i) { tried[i] = admit(cur, kAllEffects[i]); });
       if (stage == base) alone = tried;
-      if (stage == base + 1 && cur.linear.size() == 1 && cur.first == path[base].first && !cur.nonlinear) {
+      const bool single = stage == base + 1 && cur.linear.size() == 1 && cur.first == path[base].first && !cur.nonlinear;
+      if (single) {
         alternatives = equivalents(cur.linear[0], alone, tried);
         additions = possible_additions(cur, tried);
       }
+      const bool to_delay = single && lagging_delay_suffices(cur.linear[0], alone, tried);
       for (size_t i = 0; i < kAllEffects.size(); ++i) {
         const Effect e = kAllEffects[i];
         std::optional<Stage> next = std::move(tried[i]);
@@ -1738,6 +1740,11 @@ class ForwardSelection {
       }
       if (best_linear && best_linear->admitted && (!best || score(*best_linear) < score(*best)))
         best = std::move(best_linear);
+      if (!best && to_delay) {  // the low-pass alone would be the verdict: the delay instead, and its stage redone
+        path.back() = *alone[index_of(Effect::Delay)];
+        --stage;
+        continue;
+      }
       if (!best) break;
       path.push_back(exchanged(cur, std::move(*best)));
     }
@@ -1805,6 +1812,48 @@ class ForwardSelection {
     for (EffectFit& f : next.fits)
       if (f.effect() == e) f.p_value = p;
     return next;
+  }
+
+  static size_t index_of(Effect e) {
+    return static_cast<size_t>(std::find(kAllEffects.begin(), kAllEffects.end(), e) - kAllEffects.begin());
+  }
+
+  // Parsimony between the two lags: whether the low-pass e = sensor_dynamics
+  // the criterion chose is to give way to a delay admitted alone, with fewer
+  // parameters, that lags too (τ > 0) and beside which the low-pass is not
+  // significant (the pair fitted at stage 2 against the delay alone: the
+  // F-test every addition passes, at effect_alpha). The Schwarz criterion
+  // charges ½ ln(2K) per parameter (2.3 for K = 48), less than that F-test's
+  // critical value (effect_alpha 1e-3: χ²₁ 10.8 in units of 2V, 5.4 of V),
+  // so it took the low-pass's extra parameter where the selection's own test,
+  // asked whether the record demands it beyond the delay, says no (a delay of
+  // 0.58 samples named an order-2 low-pass, cut-off 0.34 Hz, damping 0.60:
+  // nearly linear phase, flat magnitude in a band to 0.12 Hz; the low-pass
+  // beside the delay at p 0.022: gap-validate --continuous seed 1 case 63).
+  // Only a lagging delay: the low-pass always lags, so only there are the two
+  // stand-ins for one another; where the best delay leads (τ < 0), the
+  // low-pass explains the magnitude, not a lag. And only where the low-pass
+  // alone would be the verdict (run): a pair the selection goes on to build
+  // from the low-pass is not rebuilt from the delay. Measured on 1200 blind
+  // cases (gap-validate seeds 1–4 × classic, continuous, structure): 4
+  // delays named a low-pass are named right, 1 clear low-pass (cut-off 0.13
+  // Hz at a band edge of 0.10 Hz) is named a delay, with the low-pass as its
+  // alternative; nothing else changes. Taken on seeds 1, 2 over a first form
+  // (any simpler effect, τ of either sign, applied at stage 2 whatever
+  // followed), which turned 3 misses right and 7 right verdicts wrong — 5
+  // low-passes with a leading best delay, a pair rebuilt from the delay;
+  // seeds 3, 4 then held out: 1 right, none wrong.
+  bool lagging_delay_suffices(Effect e, const std::array<std::optional<Stage>, kAllEffects.size()>& alone,
+                              const std::array<std::optional<Stage>, kAllEffects.size()>& pairs) const {
+    const size_t is = index_of(e), id = index_of(Effect::Delay);
+    if (e != Effect::SensorDynamics || !alone[is] || !alone[id] || !pairs[id]) return false;
+    const Stage& delay = *alone[id];
+    if (!delay.admitted || delay.q >= alone[is]->q) return false;
+    const auto lag = std::find_if(delay.fits.begin(), delay.fits.end(),
+                                  [](const EffectFit& f) { return f.effect() == Effect::Delay; });
+    if (lag == delay.fits.end() || !(std::get<Delay>(lag->parameters).samples > 0)) return false;
+    const Stage& pair = *pairs[id];
+    return dg_.f_test(delay.V, pair.V, std::max(1, pair.q - delay.q), pair.q) >= o_.effect_alpha;
   }
 
   // The linear effects g that explain the data as well as e: g admitted
@@ -2100,8 +2149,7 @@ void conclude(const Spectra& s, const LineStats& st0, const Augment& a0, const A
     std::optional<double> bound;
     for (const EffectFit& c : rep.candidates) {
       const double level = admission_level(c.effect(), options);
-      const bool chosen = std::any_of(rep.chosen.begin(), rep.chosen.end(),
-                                      [&](const EffectFit& f) { return f.effect() == c.effect(); });
+      const bool chosen = std::find(rep.present.begin(), rep.present.end(), c.effect()) != rep.present.end();
       if (chosen || !(c.p_value >= level) || !(c.gap_after < rep.gap_after)) continue;
       if (!bound) bound = gap_noise_bound(st1.M, static_cast<int>(K));
       if (!(c.gap_after < rep.gap_after - *bound)) continue;

@@ -39,8 +39,12 @@
 /// and admitted by its effect's test on that joint fit; no stage may raise the
 /// gap by more than 3 null standard deviations of it; among admissible
 /// additions the lowest Schwarz criterion wins (a richer effect pays for its
-/// parameters). The chosen set never leaves more than the best effect admitted
-/// alone by more than those 3 sd. A transient proven on the model as given
+/// parameters). A low-pass that would be the verdict alone gives way to a
+/// lagging delay (τ > 0) admitted alone beside which it is not significant
+/// (its F-test at effect_alpha): the two lags stand in for one another, and
+/// the criterion's penalty is weaker than that test. The chosen set never
+/// leaves more than the best effect admitted alone by more than those 3 sd. A
+/// transient proven on the model as given
 /// (the transient test rejects at effect_alpha) leads: its periods are dropped
 /// first and the other effects selected on the steady-state periods, without
 /// the 3 sd rule for that step (the transient's scatter hides misfit in the
