@@ -1814,6 +1814,7 @@ class ForwardSelection {
     return next;
   }
 
+  // e's index in kAllEffects (the order of the stage arrays `alone`, `tried`).
   static size_t index_of(Effect e) {
     return static_cast<size_t>(std::find(kAllEffects.begin(), kAllEffects.end(), e) - kAllEffects.begin());
   }
@@ -1865,7 +1866,7 @@ class ForwardSelection {
   std::vector<std::pair<Effect, double>> equivalents(Effect e, const std::array<std::optional<Stage>, kAllEffects.size()>& alone,
                                                      const std::array<std::optional<Stage>, kAllEffects.size()>& pairs) const {
     std::vector<std::pair<Effect, double>> out;
-    const auto ie = static_cast<size_t>(std::find(kAllEffects.begin(), kAllEffects.end(), e) - kAllEffects.begin());
+    const size_t ie = index_of(e);
     if (ie >= kAllEffects.size() || !alone[ie]) return out;
     const double K = static_cast<double>(s_.exc.size());
     for (size_t i = 0; i < kAllEffects.size(); ++i) {

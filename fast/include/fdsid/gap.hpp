@@ -44,8 +44,8 @@
 /// (its F-test at effect_alpha): the two lags stand in for one another, and
 /// the criterion's penalty is weaker than that test. The chosen set never
 /// leaves more than the best effect admitted alone by more than those 3 sd. A
-/// transient proven on the model as given
-/// (the transient test rejects at effect_alpha) leads: its periods are dropped
+/// transient proven on the model as given (the transient test rejects at
+/// effect_alpha) leads: its periods are dropped
 /// first and the other effects selected on the steady-state periods, without
 /// the 3 sd rule for that step (the transient's scatter hides misfit in the
 /// noise floor; gap_model_used). Verdict: no_gap, explained (what remains
