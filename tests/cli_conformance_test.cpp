@@ -2,6 +2,7 @@
 // identify-spectrum / identify-frf pass every case; deliberately wrong
 // candidates (a mislabelled p or r, a model of another system) fail theirs; a candidate that crashes, hangs
 // or writes no valid JSON fails its case, never the runner (exit 1, not 2).
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <fstream>
@@ -217,14 +218,26 @@ TEST_F(Conformance, BadInputIsRefusedBeforeAnyCandidateRuns) {
   std::ofstream(copy / "cases.json") << manifest.dump(1);
   EXPECT_TRUE(IsBadInput(run_fdsid({"conformance", "--suite", copy.string(), "--candidate", cand}),
                          {"differ from cases.json", "scripts/certify.sh"}));
-  // A misspelt setting in the manifest is named with the values it takes, never read as the default
-  // (an "eiv_variance" other than "model" was taken as "data").
+  // So is one certified with another line rule (Eq. 34's min_input_snr
+  // changes the lines an eiv case keeps, hence its certified values).
   manifest["cases"][0]["order"] = manifest["cases"][0]["order"].get<int>() - 1;
+  const auto eiv = std::find_if(manifest["cases"].begin(), manifest["cases"].end(),
+                                [](const json& c) { return c.value("treatment", "") == "eiv"; });
+  ASSERT_NE(eiv, manifest["cases"].end()) << "the suite has no errors-in-variables case";
+  (*eiv)["min_input_snr"] = 20;
+  std::ofstream(copy / "cases.json") << manifest.dump(1);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"conformance", "--suite", copy.string(), "--candidate", cand}),
+                         {"differ from cases.json", std::string(eiv->at("case"))}));
+  eiv->erase("min_input_snr");
+  // A misspelt setting in the manifest is named with the values it takes, never read as the default
+  // (an "eiv_variance" other than "model" was taken as "data"); a setting of
+  // errors-in-variables on a case without it is refused, never ignored.
   for (const auto& [field, value, refusal] : {std::tuple<std::string, std::string, std::string>{
                                                   "eiv_variance", "modle", "use data or model"},
                                               {"domain", "Discrete", "use discrete or continuous"},
                                               {"treatment", "EIV", "use plain or eiv"},
-                                              {"kind", "FRF", "use spectrum, frf or records"}}) {
+                                              {"kind", "FRF", "use spectrum, frf or records"},
+                                              {"eiv_variance", "model", "applies to \"treatment\": \"eiv\" only"}}) {
     json bad = manifest;
     bad["cases"][0][field] = value;
     std::ofstream(copy / "cases.json") << bad.dump(1);

@@ -126,6 +126,12 @@ CaseSpec spec_from_json(const json& j, const std::string& where) {
     throw Error(ErrorKind::Input, g.where, "errors-in-variables needs a records case");
   s.eiv_variance = g.named<EivVariance>("eiv_variance", eiv_variance_names(), EivVariance::Data);
   s.min_input_snr = g.number("min_input_snr", 10);
+  // Both settle Eq. (31)'s variance and Eq. (34)'s line rule; on any other
+  // case they would be read and have no effect.
+  for (const char* key : {"eiv_variance", "min_input_snr"})
+    if (s.treatment != RecordTreatment::ErrorsInVariables && g.has(key))
+      throw Error(ErrorKind::Input, g.where + " field \"" + key + "\"",
+                  "applies to \"treatment\": \"eiv\" only; drop it, or give that treatment");
   return s;
 }
 
@@ -145,6 +151,12 @@ json case_inputs_json(const CaseSpec& s) {
     j["method"] = s.domain == Domain::Continuous ? to_string(s.continuous_method) : "discrete";
     if (s.domain == Domain::Continuous) j["omega_scale"] = s.omega_scale;
     j["treatment"] = name_of(case_treatment_names(), s.treatment);
+    // They change the certified values (Eq. 31's variance, the lines Eq. 34
+    // keeps), so a certified file made with other settings is stale.
+    if (s.treatment == RecordTreatment::ErrorsInVariables) {
+      j["eiv_variance"] = name_of(eiv_variance_names(), s.eiv_variance);
+      j["min_input_snr"] = s.min_input_snr;
+    }
   }
   return j;
 }
@@ -245,6 +257,7 @@ std::string CaseSpec::fdsid_arguments(const std::string& suite) const {
   if (treatment == RecordTreatment::ErrorsInVariables) {
     a += " --eiv";
     if (eiv_variance != EivVariance::Data) a += std::string(" --eiv-variance ") + name_of(eiv_variance_names(), eiv_variance);
+    if (min_input_snr != CaseSpec{}.min_input_snr) a += " --min-input-snr " + fmt(min_input_snr, 17);
   }
   return a;
 }
