@@ -125,7 +125,7 @@ CaseSpec spec_from_json(const json& j, const std::string& where) {
   if (s.treatment != RecordTreatment::Plain && s.kind != CaseKind::Records)
     throw Error(ErrorKind::Input, g.where, "errors-in-variables needs a records case");
   s.eiv_variance = g.named<EivVariance>("eiv_variance", eiv_variance_names(), EivVariance::Data);
-  s.min_input_snr = g.number("min_input_snr", 10);
+  s.min_input_snr = g.number("min_input_snr", s.min_input_snr);
   // Both settle Eq. (31)'s variance and Eq. (34)'s line rule; on any other
   // case they would be read and have no effect.
   for (const char* key : {"eiv_variance", "min_input_snr"})
