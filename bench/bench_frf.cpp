@@ -57,6 +57,23 @@ void BM_IdentifyFrf(benchmark::State& state) {
   state.counters["r"] = r;
 }
 
+// identify_frf with the order given (n_a = 4) and r left to Section 5's
+// search: every r in [1.5 n_a, 6 n_a] = [6, 24] screened by V_SUB (Eq. 35), the
+// least one recomputed as identify_frf_fixed does — what a user waits for
+// when no --r is given.
+void BM_IdentifyFrfRSearch(benchmark::State& state) {
+  const int F = static_cast<int>(state.range(0));
+  const fdsid::FrfData d = make_data(F);
+  fdsid::FrfOptions o;
+  o.order = 4;
+  for (auto _ : state) {
+    fdsid::FrfResult res = fdsid::identify_frf(d, o);
+    benchmark::DoNotOptimize(res.model.A.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["F"] = F;
+}
+
 // Step 1 alone (TSQR of Zᵀ, C_Y, its Cholesky factor and the SVD of step 1c):
 // fdsid::frf_singular_values, the part BM_PlainQR compares against.
 void BM_Step1(benchmark::State& state) {
@@ -164,6 +181,7 @@ BENCHMARK(BM_RefineSpectrum)->Arg(1000)->Arg(32000)->Unit(benchmark::kMillisecon
 BENCHMARK(BM_Figure1Runs)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(2);
 
 BENCHMARK(BM_IdentifyFrf)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
+BENCHMARK(BM_IdentifyFrfRSearch)->Arg(999)->Arg(100000)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
 BENCHMARK(BM_Step1)->Apply(sizes)->Unit(benchmark::kMillisecond)->UseRealTime()->ComputeStatistics("min", min_of);
 // A middle size where step 1's QR splits into blocks of less than one chunk
 // (numerics/qr.cpp: F = 5000, r = 40 gives seven blocks of 714 frequencies).

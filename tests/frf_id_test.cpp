@@ -651,6 +651,92 @@ TEST(FrfAutomatic, RSelectionPassesOverAnROfLeastVSubWhoseEstimateIsUnusable) {
   EXPECT_GE(passed_over, 1);
 }
 
+// The r search screens every r from one QR of Zᵀ at the top of its range
+// (columns interleaved, each r's R re-triangularised from a leading block),
+// then recomputes the least as identify_frf_fixed does. Two checks:
+//  - the chosen estimate is identify_frf_fixed's at the chosen r, bit for bit
+//    (so --r reproduces what the search chose);
+//  - every screened V_SUB agrees with identify_frf_fixed's at its r to
+//    rounding. Tolerance: with e = w (Y − Ĝ U) the weighted residual (V =
+//    ‖e‖²) and Ĝ moved by a relative ε, ‖δe‖ ≤ ε ‖w Ĝ U‖ ≈ ε √S, S = Σ
+//    |Y|²/σ², so |δV| ≤ 2 ε √(S V) + ε² S. ε: the two estimates' rounding
+//    errors added, each ≈ u × condition = error_estimate (the first-order
+//    bound on Â's relative error, which bounds Ĝ's to first order); the
+//    screened R is the R of two backward-stable QRs composed (twice the
+//    columnwise backward error), so ε = (1 + 2) × error_estimate.
+//  The tolerance is asserted to be far below what distinguishes one r from
+//  another (V_SUB moves by ≥ 1e-5 relative between neighbouring r in these cases;
+//  the tolerance must lie 10⁴ times below that), so a
+//  wrong block, permutation or C_Y prefix cannot pass.
+TEST(FrfAutomatic, RSearchScreensEveryRAsIdentifyFrfFixedDoesToRounding) {
+  struct Case {
+    std::string name;
+    StateSpace sys;
+    Eigen::VectorXd omega;
+    ContinuousMethod method;
+  };
+  std::mt19937_64 rng(47);
+  StateSpace mimo = eq36();
+  mimo.B.resize(4, 2);
+  mimo.B << 0.2247, -0.3, 0.8989, 0.5, 0.0323, 0.7, 0.1290, -0.2;
+  mimo.C.resize(2, 4);
+  mimo.C << 0.4719, 0.1124, 9.6774, 1.6129, -0.8, 0.6, 0.5, 0.2;
+  mimo.D.resize(2, 2);
+  mimo.D << 0.9626, 0.1, -0.2, 0.5;
+  const std::vector<Case> cases = {
+      {"discrete, powers of z", eq36(), random_grid(rng, 300, 0.0, M_PI), ContinuousMethod::Bilinear},
+      {"discrete 2 x 2", mimo, random_grid(rng, 200, 0.0, M_PI), ContinuousMethod::Bilinear},
+      {"continuous, bilinear", two_resonances(), log_grid(0.1, 300, 200), ContinuousMethod::Bilinear},
+      {"continuous, orthogonal", two_resonances(), log_grid(0.3, 100, 200), ContinuousMethod::Orthogonal},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    // Noisy FRF, variance 1e-4 × the mean power of the entries (SNR 40 dB).
+    const FrfData clean = noise_free_frf(c.sys, c.omega);
+    double power = 0;
+    for (int k = 0; k < clean.frequencies(); ++k) power += clean.Y[k].squaredNorm() / clean.Y[k].size();
+    const double var = 1e-4 * power / clean.frequencies();
+    std::vector<Eigen::MatrixXcd> G;
+    std::vector<Eigen::MatrixXd> V;
+    for (int k = 0; k < clean.frequencies(); ++k) {
+      Eigen::MatrixXcd g = clean.Y[k];
+      for (Eigen::Index i = 0; i < g.size(); ++i) g(i) += complex_normal(rng, var);
+      G.push_back(g);
+      V.push_back(Eigen::MatrixXd::Constant(g.rows(), g.cols(), var));
+    }
+    const FrfData d = frf_data(c.sys.domain, c.omega, G, V);
+    double S = 0;
+    for (int k = 0; k < d.frequencies(); ++k) S += d.Y[k].squaredNorm() / var;
+    FrfOptions o;
+    o.order = 4;
+    o.continuous = c.method;
+    const FrfResult res = identify_frf(d, o);
+    ASSERT_EQ(res.r_scan.size(), 19u);  // r = 6 … 24
+    const FrfResult at = identify_frf_fixed(d, 4, res.r, o.continuous, 0, o.discrete, true);
+    EXPECT_EQ(res.model.A, at.model.A);
+    EXPECT_EQ(res.model.B, at.model.B);
+    EXPECT_EQ(res.model.C, at.model.C);
+    EXPECT_EQ(res.model.D, at.model.D);
+    EXPECT_EQ(res.v_sub, at.v_sub);
+    double worst = 0, loosest = 0, spread = std::numeric_limits<double>::infinity();
+    double previous = 0;
+    for (const auto& [r, v] : res.r_scan) {
+      const FrfResult f = identify_frf_fixed(d, 4, r, o.continuous, 0, o.discrete, false);
+      const double eps = 3 * f.error_estimate;
+      const double tol = 2 * eps * std::sqrt(S * f.v_sub) + eps * eps * S;
+      EXPECT_LE(std::abs(v - f.v_sub), tol) << "r = " << r << ": screened " << v << ", identify_frf_fixed " << f.v_sub;
+      worst = std::max(worst, std::abs(v - f.v_sub) / tol);
+      loosest = std::max(loosest, tol / f.v_sub);
+      if (previous > 0) spread = std::min(spread, std::abs(f.v_sub / previous - 1));
+      previous = f.v_sub;
+    }
+    std::cout << "  [measured] " << c.name << ": chosen r = " << res.r << ", worst |screened - fixed| / tolerance "
+              << worst << ", loosest tolerance " << loosest << " x V_SUB, least change between neighbouring r "
+              << spread << "\n";
+    EXPECT_LT(loosest, 1e-4 * spread + 1e-300) << "tolerance too loose to tell one r from another";
+  }
+}
+
 // ---------------------------------------------------------------------------
 // Section 4.1: sample statistics, DFT of periods, periodic records
 

@@ -7,6 +7,8 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <map>
+#include <optional>
 #include <set>
 
 #include <boost/math/distributions/chi_squared.hpp>
@@ -321,18 +323,6 @@ void step1_check_size(const FrfData& d, const Bases& b, int r) {
              std::to_string(cols) + " rows: more frequencies or a smaller r (r = " + std::to_string(r) + ")");
 }
 
-// Steps 1a-1b: R of the QR of Zᵀ.
-//
-// Purpose: the upper-triangular R (r (m+p) square) of Zᵀ = Q R, with the
-// input block R11 (r m square) checked for persistence of excitation.
-// Method: rows of Zᵀ for frequency k, column j: Re and Im of
-// [W_u(k) ⊗ U_j(k); W_y(k) ⊗ Y_j(k)] (Eqs. 9, 11, 18), streamed into the TSQR.
-// Numerical aspects: Assumption 3 (persistence of excitation): R11 must be
-// non-singular. Its diagonal is |R11_ii|; rank deficiency shows as a diagonal
-// entry at the rounding level, 100 · u · √(rows) · max |R11_ii| (Householder
-// backward error; numerics/rank.hpp), rows = 2 F c.
-// Fails: Error(Numerical) when 𝐔^re is rank deficient.
-// References: Pintelon (2002) Eqs. (9), (11), (18), Assumption 3.
 // Where the data lie, for the messages of step 1 (review finding 13: a basis
 // numerically dependent on a narrow band was reported as "variances too
 // small"): the band and what to do about it.
@@ -353,12 +343,23 @@ std::string band_advice(const FrfData& d, const Bases& b, int r) {
          "the other --method";
 }
 
-// The chunk is filled column by column (basis row i, channel a), each column
+// The order of Zᵀ's columns. Blocked: Eqs. (9), (18)'s [𝐔^re; 𝐘^re], basis
+// row i and input a in column i m + a, output a in r m + i p + a — what steps
+// 1b-1c read (R11 and R22). Interleaved: basis row i's m inputs and p outputs
+// together, columns i (m + p) + a and i (m + p) + m + a; the r search's
+// order, in which Zᵀ at r is the first r (m + p) columns of Zᵀ at any larger
+// r (the bases are nested in r: powers, and the Arnoldi polynomials q_0 …
+// q_{r−1} do not depend on how many follow).
+enum class ColumnOrder { Blocked, Interleaved };
+
+// R of the QR of Zᵀ (r (m+p) square, upper triangular) with its columns in
+// `order`. The chunk is filled column by column (basis row i, channel a), each column
 // a contiguous run of the column-major work matrix: filled row by row it was
 // 80 strided writes per row at r = 40 (a fifth of step 1 at F = 999).
-Eigen::MatrixXd step1ab_qr(const FrfData& d, const Bases& b, int r) {
+Eigen::MatrixXd step1ab_r(const FrfData& d, const Bases& b, int r, ColumnOrder order) {
   const int F = d.frequencies(), m = d.inputs(), p = d.outputs(), c = d.columns();
   const int nu = r * m, ny = r * p, cols = nu + ny;
+  const bool blocked = order == ColumnOrder::Blocked;
   // Group k's rows 2j, 2j + 1: Re and Im of column j; in column (i, a):
   // W_i(ξ_k) U_k(a, j) (input block) or W_i(ξ_k) Y_k(a, j) (output block).
   const auto column = [&](const ComplexMatrixStack& X, const Eigen::VectorXcd& w, int a, int g0, double* out) {
@@ -372,14 +373,21 @@ Eigen::MatrixXd step1ab_qr(const FrfData& d, const Bases& b, int r) {
   const numerics::ChunkFill fill = [&](int g0, int g1, Eigen::Ref<Eigen::MatrixXd> rows) {
     BasisRow w(b, g0, g1 - g0);
     for (int i = 0; i < r; ++i, w.next()) {
-      for (int a = 0; a < m; ++a) column(d.U, w.u(), a, g0, rows.col(i * m + a).data());
-      for (int a = 0; a < p; ++a) column(d.Y, w.y(), a, g0, rows.col(nu + i * p + a).data());
+      const int u0 = blocked ? i * m : i * (m + p), y0 = blocked ? nu + i * p : i * (m + p) + m;
+      for (int a = 0; a < m; ++a) column(d.U, w.u(), a, g0, rows.col(u0 + a).data());
+      for (int a = 0; a < p; ++a) column(d.Y, w.y(), a, g0, rows.col(y0 + a).data());
     }
   };
-  Eigen::MatrixXd R = numerics::streamed_qr_r(F, 2 * c, cols, fill);
+  return numerics::streamed_qr_r(F, 2 * c, cols, fill);
+}
+
+// Assumption 3 on step 1b's R (blocked columns; R11 = its first r m rows and
+// columns), as step1ab_qr checks it.
+void check_input_excitation(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, int r) {
+  const int nu = r * d.inputs();
   const Eigen::VectorXd r11 = R.topLeftCorner(nu, nu).diagonal().cwiseAbs();
   const double r11max = r11.maxCoeff();
-  if (!numerics::numerically_full_rank(r11, std::sqrt(2.0 * F * c))) {
+  if (!numerics::numerically_full_rank(r11, std::sqrt(2.0 * d.frequencies() * d.columns()))) {
     const std::string ratio = r11max > 0 ? fmt(r11.minCoeff() / r11max, 3)
                                          : "0 / 0: R11 is zero, the input zero or so small that its squares underflow";
     fail(ErrorKind::Numerical, "step 1b",
@@ -387,6 +395,23 @@ Eigen::MatrixXd step1ab_qr(const FrfData& d, const Bases& b, int r) {
              "): the input does not excite r = " + std::to_string(r) +
              " basis functions (Pintelon 2002 Assumption 3): " + band_advice(d, b, r) + ", or excite more lines");
   }
+}
+
+// Steps 1a-1b: R of the QR of Zᵀ.
+//
+// Purpose: the upper-triangular R (r (m+p) square) of Zᵀ = Q R, with the
+// input block R11 (r m square) checked for persistence of excitation.
+// Method: rows of Zᵀ for frequency k, column j: Re and Im of
+// [W_u(k) ⊗ U_j(k); W_y(k) ⊗ Y_j(k)] (Eqs. 9, 11, 18), streamed into the TSQR.
+// Numerical aspects: Assumption 3 (persistence of excitation): R11 must be
+// non-singular. Its diagonal is |R11_ii|; rank deficiency shows as a diagonal
+// entry at the rounding level, 100 · u · √(rows) · max |R11_ii| (Householder
+// backward error; numerics/rank.hpp), rows = 2 F c.
+// Fails: Error(Numerical) when 𝐔^re is rank deficient.
+// References: Pintelon (2002) Eqs. (9), (11), (18), Assumption 3.
+Eigen::MatrixXd step1ab_qr(const FrfData& d, const Bases& b, int r) {
+  Eigen::MatrixXd R = step1ab_r(d, b, r, ColumnOrder::Blocked);
+  check_input_excitation(d, b, R, r);
   return R;
 }
 
@@ -459,11 +484,10 @@ Step1 step1c_whitened_svd(const Eigen::MatrixXd& CY, const Eigen::MatrixXd& R, i
   return s;
 }
 
-// Step 1c on R of step 1b: C_Y of d's variances and the whitened SVD.
-Step1 step1c(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, int r) {
+// Step 1c on R of step 1b and C_Y of d's variances: the whitened SVD.
+Step1 step1c(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, Eigen::MatrixXd CY, int r) {
   const int nu = r * d.inputs();
   const double r11_cond = triangular_condition(R.topLeftCorner(nu, nu));
-  Eigen::MatrixXd CY = step1c_noise_covariance(d, b, r);
   Step1 s = step1c_whitened_svd(CY, R, r, d, b);
   s.CY = std::move(CY);
   s.r11_condition = r11_cond;
@@ -473,7 +497,7 @@ Step1 step1c(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, int r) 
 // Step 1 (a-c): size checks, R of Zᵀ (1a-1b), C_Y and the whitened SVD (1c).
 Step1 step1(const FrfData& d, const Bases& b, int r) {
   step1_check_size(d, b, r);
-  return step1c(d, b, step1ab_qr(d, b, r), r);
+  return step1c(d, b, step1ab_qr(d, b, r), step1c_noise_covariance(d, b, r), r);
 }
 
 // Step 3, Eq. (17): (B, D) minimising Σ |Y − (C(ξI − A)⁻¹B + D)U|² / σ²
@@ -966,13 +990,13 @@ RoundingEffect rounding_effect(const FrfData& d, const Bases& b, const Eigen::Ma
 }
 
 // identify_frf_fixed from step 1c on: the estimate of order n from R of step
-// 1b and d's variances.
+// 1b and C_Y of d's variances.
 // assess_rounding: measure the rounding's effect on Ĝ and the poles (when
 // A's bound exceeds the warning level); the r search leaves it to its choice.
-FrfResult estimate_from_r(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, int order, int r,
-                          bool assess_rounding = true) {
+FrfResult estimate_from_r(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, Eigen::MatrixXd CY, int order,
+                          int r, bool assess_rounding) {
   const int n = order;
-  const Step1 s1 = step1c(d, b, R, r);
+  const Step1 s1 = step1c(d, b, R, std::move(CY), r);
   if (!(s1.sigma(n - 1) > 0))
     fail(ErrorKind::Order, "step 1c", "singular value " + std::to_string(n) + " is zero: the data hold no order-" +
                                           std::to_string(n) + " model");
@@ -1033,7 +1057,7 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
   check_r_size(d, r, stored_bases(d.domain, continuous, discrete));
   const Bases b = make_bases(d, r, continuous, omega_scale, discrete);
   step1_check_size(d, b, r);
-  return estimate_from_r(d, b, step1ab_qr(d, b, r), order, r, assess_rounding);
+  return estimate_from_r(d, b, step1ab_qr(d, b, r), step1c_noise_covariance(d, b, r), order, r, assess_rounding);
 }
 
 std::vector<FrfResult> identify_frf_fixed(const std::vector<FrfData>& data, int order, int r,
@@ -1060,7 +1084,8 @@ std::vector<FrfResult> identify_frf_fixed(const std::vector<FrfData>& data, int 
   const Eigen::MatrixXd R = step1ab_qr(d0, b, r);
   std::vector<FrfResult> out;
   out.reserve(data.size());
-  for (const FrfData& d : data) out.push_back(estimate_from_r(d, b, R, order, r, assess_rounding));
+  for (const FrfData& d : data)
+    out.push_back(estimate_from_r(d, b, R, step1c_noise_covariance(d, b, r), order, r, assess_rounding));
   return out;
 }
 
@@ -1151,36 +1176,133 @@ AutomaticOrder automatic_order(const FrfData& d, const FrfOptions& o, int r_feas
   return a;
 }
 
-// The r search's choice when the least V_SUB's estimate is unusable in double
-// precision (no correct digit of Ĝ or the poles: the F-16's Voltage →
-// Acceleration3 FRF, continuous time, order 12, chose r = 46, where
-// rounding-size moves of C_Y make step 1c fail; r = 44 gives a usable model
-// with V_SUB 0.07 % higher): a model rounding alone decides is not one a
-// user can reproduce or rely on, so the r are tried again, assessed, in
-// increasing V_SUB, and the first usable one is taken, with a note naming
-// both. When none is usable the least V_SUB's estimate stays, with its
-// warning and one more saying every r was tried.
-FrfResult least_v_sub_usable(const FrfData& d, const FrfOptions& o, int order, FrfResult unusable,
-                             std::vector<std::pair<int, double>> scan) {
-  std::stable_sort(scan.begin(), scan.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
-  for (const auto& [r, v] : scan) {
-    if (r == unusable.r) continue;
-    FrfResult res = identify_frf_fixed(d, order, r, o.continuous, o.omega_scale, o.discrete, true);
-    if (!usable_precision(res.usability_estimate())) continue;
-    const double error = unusable.usability_estimate();
-    res.notes.push_back("r = " + std::to_string(r) + " chosen, the least V_SUB (Eq. 35) of the r whose estimate is usable " +
-                        "in double precision: r = " + std::to_string(unusable.r) + " has the least V_SUB (" +
-                        fmt(unusable.v_sub, 6) + "; " + fmt(res.v_sub, 6) + " at r = " + std::to_string(r) + ", " +
-                        fmt(100 * (res.v_sub / unusable.v_sub - 1), 2) + " % more) but its estimate is unusable (" +
-                        (std::isfinite(error) ? "estimated relative error of G or the poles " + fmt(error, 2)
-                                              : std::string("a rounding-size move of its inputs made the estimate fail")) +
-                        ")");
-    res.r_unusable_least_v_sub = unusable.r;
-    return res;
+// ---------------------------------------------------------------------------
+// Section 5's r search, screened from one factorisation.
+//
+// Purpose: V_SUB (Eq. 35) at every r of [r_lo, r_hi] without a QR of Zᵀ per r
+// (Σ_r O(F r²): 19 QRs of Zᵀ at n_a = 4, 46 at n_a = 10).
+// Method: with Zᵀ's columns interleaved (ColumnOrder), Zᵀ at r is the first
+// r (m + p) columns of Zᵀ at r_hi, so its R (interleaved) is the leading
+// r (m + p) block of the one R at r_hi. Its columns are permuted back to the
+// blocked order of steps 1b-1c and re-triangularised by a Householder QR of
+// that square block: O(r³ (m + p)³) per r instead of O(F r² (m + p)²). C_Y
+// at r is the leading r p block of C_Y at r_hi (rows i p + a), and step 2's
+// H the leading r × (r − 1) block — bit for bit what identify_frf_fixed
+// builds at r.
+// Numerical aspects: R at r_hi is the exact R of Zᵀ + ΔZ with the streamed
+// QR's columnwise bound ‖ΔZ(:, j)‖ ≲ γ ‖Zᵀ(:, j)‖ (Higham Thm 19.4); the
+// second QR, backward stable for the permuted block, adds ≲ γ' ‖R(:, j)‖ =
+// γ' ‖Zᵀ(:, j)‖ per column: the same columnwise bound as identify_frf_fixed's
+// own R, with a larger constant. The screened estimate at r therefore differs
+// from identify_frf_fixed's by rounding only (≈ its error_estimate,
+// relative), and choose_r recomputes the ones it may choose as
+// identify_frf_fixed does.
+class ScreenedStep1 {
+ public:
+  ScreenedStep1(const FrfData& d, int r_hi, const FrfOptions& o) {
+    check_r_size(d, r_hi, stored_bases(d.domain, o.continuous, o.discrete));
+    b_ = make_bases(d, r_hi, o.continuous, o.omega_scale, o.discrete);
+    step1_check_size(d, b_, r_hi);
+    R_ = step1ab_r(d, b_, r_hi, ColumnOrder::Interleaved);
+    CY_ = step1c_noise_covariance(d, b_, r_hi);
   }
-  unusable.warnings.push_back("no r the search tried (" + std::to_string(scan.size()) +
-                              " values) gives an estimate usable in double precision; the least V_SUB's is kept");
-  return unusable;
+  // identify_frf_fixed(d, order, r, ..., false) up to rounding, for r ≤ r_hi.
+  FrfResult estimate(const FrfData& d, int order, int r) const {
+    check_order_r(d, order, r);
+    const int m = d.inputs(), p = d.outputs(), cols = r * (m + p);
+    const Eigen::MatrixXd lead = R_.topLeftCorner(cols, cols).triangularView<Eigen::Upper>();
+    Eigen::MatrixXd blocked(cols, cols);
+    for (int i = 0; i < r; ++i) {
+      for (int a = 0; a < m; ++a) blocked.col(i * m + a) = lead.col(i * (m + p) + a);
+      for (int a = 0; a < p; ++a) blocked.col(r * m + i * p + a) = lead.col(i * (m + p) + m + a);
+    }
+    const Eigen::MatrixXd R =
+        Eigen::HouseholderQR<Eigen::MatrixXd>(blocked).matrixQR().triangularView<Eigen::Upper>();
+    // Steps 2-3's bases at r: ξ and H's leading block. Wu and Wy (r_hi × F)
+    // are not copied: steps 1a-1c, their only readers, are done.
+    Bases b;
+    b.xi = b_.xi;
+    b.orthogonal = b_.orthogonal;
+    if (b.orthogonal) b.H = b_.H.topLeftCorner(r, r - 1);
+    b.q0 = b_.q0;
+    b.omega_scale = b_.omega_scale;
+    b.tustin = b_.tustin;
+    check_input_excitation(d, b, R, r);
+    return estimate_from_r(d, b, R, CY_.topLeftCorner(r * p, r * p), order, r, false);
+  }
+
+ private:
+  Bases b_;               // at r_hi
+  Eigen::MatrixXd R_;     // R of Zᵀ at r_hi, interleaved columns
+  Eigen::MatrixXd CY_;    // C_Y at r_hi
+};
+
+// Section 5's choice among the screened r.
+//
+// Purpose: the r of least V_SUB whose estimate is usable in double precision,
+// its estimate exactly what identify_frf_fixed gives at that r (so --r
+// reproduces it) and assessed for rounding.
+// Method: repeatedly take the least V_SUB not yet ruled out; a screened value
+// is replaced by identify_frf_fixed's at its r (assessed), which rules the r
+// out when its estimate is unusable or drops it when the estimate fails; the
+// first least value that is a usable recomputed estimate is the choice. At
+// the one r of a clear minimum this is one more identification; every listed
+// V_SUB below the choice belongs to an unusable estimate, recomputed.
+// An unusable least V_SUB (the F-16's Voltage → Acceleration3 FRF,
+// continuous time, order 12, had r = 46, where rounding-size moves of C_Y
+// make step 1c fail; r = 44 gives a usable model with V_SUB 0.07 % higher): a
+// model rounding alone decides is not one a user can reproduce or rely on;
+// the choice names both. When none is usable, the least V_SUB's estimate
+// stays with its warning and one more saying every r was tried.
+// Fails: Error(Numerical) when every recomputed estimate fails.
+FrfResult choose_r(const FrfData& d, const FrfOptions& o, int order, std::vector<std::pair<int, double>>& scan) {
+  std::map<int, FrfResult> recomputed;
+  std::set<int> unusable;
+  std::string last_error;
+  for (;;) {
+    auto least = scan.end();
+    for (auto it = scan.begin(); it != scan.end(); ++it)
+      if (!unusable.count(it->first) && (least == scan.end() || it->second < least->second)) least = it;
+    if (least == scan.end()) break;
+    const int r = least->first;
+    if (const auto done = recomputed.find(r); done != recomputed.end()) {
+      FrfResult res = std::move(done->second);
+      // The least V_SUB listed, when it is not this one, is an unusable estimate's.
+      const auto overall = std::min_element(scan.begin(), scan.end(),
+                                            [](const auto& a, const auto& b) { return a.second < b.second; });
+      if (overall->first != r) {
+        const FrfResult& u = recomputed.at(overall->first);
+        const double error = u.usability_estimate();
+        res.notes.push_back(
+            "r = " + std::to_string(r) + " chosen, the least V_SUB (Eq. 35) of the r whose estimate is usable " +
+            "in double precision: r = " + std::to_string(u.r) + " has the least V_SUB (" + fmt(u.v_sub, 6) + "; " +
+            fmt(res.v_sub, 6) + " at r = " + std::to_string(r) + ", " + fmt(100 * (res.v_sub / u.v_sub - 1), 2) +
+            " % more) but its estimate is unusable (" +
+            (std::isfinite(error) ? "estimated relative error of G or the poles " + fmt(error, 2)
+                                  : std::string("a rounding-size move of its inputs made the estimate fail")) +
+            ")");
+        res.r_unusable_least_v_sub = u.r;
+      }
+      return res;
+    }
+    try {
+      FrfResult res = identify_frf_fixed(d, order, r, o.continuous, o.omega_scale, o.discrete, true);
+      least->second = res.v_sub;
+      if (!usable_precision(res.usability_estimate())) unusable.insert(r);
+      recomputed.emplace(r, std::move(res));
+    } catch (const Error& e) {  // rounding decides whether there is an estimate at r: not one to list
+      last_error = e.what();
+      scan.erase(least);
+    }
+  }
+  if (scan.empty())
+    fail(ErrorKind::Numerical, "r selection", "every r the search screened failed when recomputed; last: " + last_error);
+  const auto overall = std::min_element(scan.begin(), scan.end(),
+                                        [](const auto& a, const auto& b) { return a.second < b.second; });
+  FrfResult res = std::move(recomputed.at(overall->first));
+  res.warnings.push_back("no r the search tried (" + std::to_string(scan.size()) +
+                         " values) gives an estimate usable in double precision; the least V_SUB's is kept");
+  return res;
 }
 
 }  // namespace
@@ -1204,30 +1326,29 @@ FrfResult identify_frf(const FrfData& d, const FrfOptions& o) {
     if (r_hi < r_lo)
       fail(ErrorKind::Dimension, "r", "no r in [" + std::to_string(r_lo) + ", " + std::to_string(r_hi) +
                                           "] fits " + std::to_string(F) + " frequencies (need 2 F c >= r (m + p))");
-    bool found = false;
+    // Screened from one factorisation at r_hi; where that cannot be made
+    // (memory, or the Arnoldi basis breaking down below r_hi), each r on its
+    // own, as identify_frf_fixed, and its own failure is the one reported.
+    std::optional<ScreenedStep1> screened;
+    try {
+      screened.emplace(d, r_hi, o);
+    } catch (const Error&) {
+    }
     std::string last_error;
     std::vector<std::pair<int, double>> scan;
     for (int r = r_lo; r <= r_hi; ++r) {
       try {
-        FrfResult res = identify_frf_fixed(d, order, r, o.continuous, o.omega_scale, o.discrete, false);
-        scan.emplace_back(r, res.v_sub);
-        if (!found || res.v_sub < best.v_sub) {
-          best = std::move(res);
-          found = true;
-        }
+        scan.emplace_back(r, (screened ? screened->estimate(d, order, r)
+                                       : identify_frf_fixed(d, order, r, o.continuous, o.omega_scale, o.discrete, false))
+                                 .v_sub);
       } catch (const Error& e) {
         last_error = e.what();
       }
     }
-    if (!found)
+    if (scan.empty())
       fail(ErrorKind::Numerical, "r selection",
            "every r in [" + std::to_string(r_lo) + ", " + std::to_string(r_hi) + "] failed; last: " + last_error);
-    // The rounding's effect on G and the poles, for the chosen r only (the
-    // same estimate again, assessed: one more run instead of one per r).
-    if (best.error_estimate > kPrecisionWarningLevel)
-      best = identify_frf_fixed(d, order, best.r, o.continuous, o.omega_scale, o.discrete, true);
-    if (!usable_precision(best.usability_estimate()))
-      best = least_v_sub_usable(d, o, order, std::move(best), scan);
+    best = choose_r(d, o, order, scan);
     best.r_scan = std::move(scan);
   }
   if (automatic.sigma.size() > 0) {

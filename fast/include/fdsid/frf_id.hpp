@@ -113,7 +113,9 @@ struct FrfResult {
   /// The r used to read the order (automatic order) — equals r otherwise.
   int order_r = 0;
   double v_sub = 0;  ///< Eq. (35) at the estimate
-  /// V_SUB for every r tried (empty when r was given).
+  /// V_SUB for every r tried (empty when r was given): screened from one
+  /// factorisation, identify_frf_fixed's own value at the chosen r and at any
+  /// r the search recomputed (those below the chosen one, ruled out as unusable).
   std::vector<std::pair<int, double>> r_scan;
   /// The r of least V_SUB when its estimate was unusable in double precision
   /// and the search took the least V_SUB among usable ones instead (a note
@@ -215,7 +217,11 @@ std::vector<FrfResult> identify_frf_fixed(const std::vector<FrfData>& data, int 
 /// model, whitened noise gives squared singular values ≈ 1 (C_Y is the
 /// covariance of 𝐍^re), so n_a counts those above (1 + √(r p / (2 F c)))²
 /// (the Marchenko–Pastur edge) times 2; without one, the largest ratio
-/// σ_n / σ_{n+1}.
+/// σ_n / σ_{n+1}. The r search screens every r from one QR of Zᵀ at the
+/// top of the range (each r's R re-triangularised from its leading block; the
+/// screened V_SUB equal identify_frf_fixed's to rounding) and recomputes the
+/// least as identify_frf_fixed does: the returned estimate is
+/// identify_frf_fixed's at the chosen r, bit for bit.
 FrfResult identify_frf(const FrfData& data, const FrfOptions& options = {});
 
 /// Step 1 only: the singular values of C_Y^{-1/2} R22ᵀ for a given r.
