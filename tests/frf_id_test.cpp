@@ -152,8 +152,8 @@ TEST(FrfNoiseFree, ContinuousFiveDecadesOrthogonal) {
   EXPECT_LT(eps_A, 1e-2) << "tolerance too loose to detect anything";
 }
 
-TEST(FrfNoiseFree, MimoTwoByTwoFrf) {
-  std::mt19937_64 rng(22);
+// Eq. (36)'s A with two inputs and two outputs (B, C, D extended by hand).
+StateSpace eq36_two_by_two() {
   StateSpace sys = eq36();
   sys.B.resize(4, 2);
   sys.B << 0.2247, -0.3, 0.8989, 0.5, 0.0323, 0.7, 0.1290, -0.2;
@@ -161,6 +161,12 @@ TEST(FrfNoiseFree, MimoTwoByTwoFrf) {
   sys.C << 0.4719, 0.1124, 9.6774, 1.6129, -0.8, 0.6, 0.5, 0.2;
   sys.D.resize(2, 2);
   sys.D << 0.9626, 0.1, -0.2, 0.5;
+  return sys;
+}
+
+TEST(FrfNoiseFree, MimoTwoByTwoFrf) {
+  std::mt19937_64 rng(22);
+  const StateSpace sys = eq36_two_by_two();
   const FrfData d = noise_free_frf(sys, random_grid(rng, 60, 0.0, M_PI));
   EXPECT_EQ(d.columns(), 2);
   const FrfResult res = identify_frf_fixed(d, 4, 6);
@@ -676,16 +682,9 @@ TEST(FrfAutomatic, RSearchScreensEveryRAsIdentifyFrfFixedDoesToRounding) {
     ContinuousMethod method;
   };
   std::mt19937_64 rng(47);
-  StateSpace mimo = eq36();
-  mimo.B.resize(4, 2);
-  mimo.B << 0.2247, -0.3, 0.8989, 0.5, 0.0323, 0.7, 0.1290, -0.2;
-  mimo.C.resize(2, 4);
-  mimo.C << 0.4719, 0.1124, 9.6774, 1.6129, -0.8, 0.6, 0.5, 0.2;
-  mimo.D.resize(2, 2);
-  mimo.D << 0.9626, 0.1, -0.2, 0.5;
   const std::vector<Case> cases = {
       {"discrete, powers of z", eq36(), random_grid(rng, 300, 0.0, M_PI), ContinuousMethod::Bilinear},
-      {"discrete 2 x 2", mimo, random_grid(rng, 200, 0.0, M_PI), ContinuousMethod::Bilinear},
+      {"discrete 2 x 2", eq36_two_by_two(), random_grid(rng, 200, 0.0, M_PI), ContinuousMethod::Bilinear},
       {"continuous, bilinear", two_resonances(), log_grid(0.1, 300, 200), ContinuousMethod::Bilinear},
       {"continuous, orthogonal", two_resonances(), log_grid(0.3, 100, 200), ContinuousMethod::Orthogonal},
   };
