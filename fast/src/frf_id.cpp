@@ -158,6 +158,20 @@ struct Bases {
   double q0 = 1;                // the constant q_0 of the output basis
   double omega_scale = 1;
   bool tustin = false;          // discrete data in Algorithm 2's bases on s' = j tan(ω/2) (omega_scale in rad/sample)
+
+  // What steps 2-3 read of these bases at r ≤ their own: ξ, H's leading
+  // block and the scalars. Wu and Wy (r × F, read by steps 1a-1c only) are
+  // left empty. A field added above is copied here or left out on purpose.
+  Bases for_steps_2_3(int r) const {
+    Bases b;
+    b.xi = xi;
+    b.orthogonal = orthogonal;
+    if (orthogonal) b.H = H.topLeftCorner(r, r - 1);
+    b.q0 = q0;
+    b.omega_scale = omega_scale;
+    b.tustin = tustin;
+    return b;
+  }
 };
 
 double default_scale(const FrfData& d) {
@@ -581,6 +595,15 @@ void check_r_size(const FrfData& d, int r, bool stored) {
                                                                     std::to_string(d.frequencies()) + " frequencies");
 }
 
+// Step 1's bases at r, checked: their own memory before they are made, Z's
+// size and memory after (step1_check_size).
+Bases checked_bases(const FrfData& d, int r, ContinuousMethod continuous, double omega_scale, DiscreteMethod discrete) {
+  check_r_size(d, r, stored_bases(d.domain, continuous, discrete));
+  Bases b = make_bases(d, r, continuous, omega_scale, discrete);
+  step1_check_size(d, b, r);
+  return b;
+}
+
 int check_order_r(const FrfData& d, int order, int r) {
   if (order < 1) fail(ErrorKind::Order, "order", "n_a must be at least 1, got " + std::to_string(order));
   if (r <= order)
@@ -831,9 +854,7 @@ Eigen::VectorXd frf_singular_values(const FrfData& data, int r, ContinuousMethod
                                     DiscreteMethod discrete) {
   validate(data);
   if (r < 2) fail(ErrorKind::Dimension, "r", "r must be at least 2, got " + std::to_string(r));
-  check_r_size(data, r, stored_bases(data.domain, continuous, discrete));
-  const Bases b = make_bases(data, r, continuous, omega_scale, discrete);
-  return step1(data, b, r).sigma;
+  return step1(data, checked_bases(data, r, continuous, omega_scale, discrete), r).sigma;
 }
 
 // The warning for an unstable estimate, or "" (issue 14: identify-frf said
@@ -1054,9 +1075,7 @@ FrfResult identify_frf_fixed(const FrfData& d, int order, int r, ContinuousMetho
                              DiscreteMethod discrete, bool assess_rounding) {
   validate(d);
   check_order_r(d, order, r);
-  check_r_size(d, r, stored_bases(d.domain, continuous, discrete));
-  const Bases b = make_bases(d, r, continuous, omega_scale, discrete);
-  step1_check_size(d, b, r);
+  const Bases b = checked_bases(d, r, continuous, omega_scale, discrete);
   return estimate_from_r(d, b, step1ab_qr(d, b, r), step1c_noise_covariance(d, b, r), order, r, assess_rounding);
 }
 
@@ -1078,9 +1097,7 @@ std::vector<FrfResult> identify_frf_fixed(const std::vector<FrfData>& data, int 
            "differs from noise model 1 in more than the variances (U, Y, omega, domain or sample time)");
   }
   check_order_r(d0, order, r);
-  check_r_size(d0, r, stored_bases(d0.domain, continuous, discrete));
-  const Bases b = make_bases(d0, r, continuous, omega_scale, discrete);
-  step1_check_size(d0, b, r);
+  const Bases b = checked_bases(d0, r, continuous, omega_scale, discrete);
   const Eigen::MatrixXd R = step1ab_qr(d0, b, r);
   std::vector<FrfResult> out;
   out.reserve(data.size());
@@ -1200,9 +1217,7 @@ AutomaticOrder automatic_order(const FrfData& d, const FrfOptions& o, int r_feas
 class ScreenedStep1 {
  public:
   ScreenedStep1(const FrfData& d, int r_hi, const FrfOptions& o) {
-    check_r_size(d, r_hi, stored_bases(d.domain, o.continuous, o.discrete));
-    b_ = make_bases(d, r_hi, o.continuous, o.omega_scale, o.discrete);
-    step1_check_size(d, b_, r_hi);
+    b_ = checked_bases(d, r_hi, o.continuous, o.omega_scale, o.discrete);
     R_ = step1ab_r(d, b_, r_hi, ColumnOrder::Interleaved);
     CY_ = step1c_noise_covariance(d, b_, r_hi);
   }
@@ -1218,15 +1233,7 @@ class ScreenedStep1 {
     }
     const Eigen::MatrixXd R =
         Eigen::HouseholderQR<Eigen::MatrixXd>(blocked).matrixQR().triangularView<Eigen::Upper>();
-    // Steps 2-3's bases at r: ξ and H's leading block. Wu and Wy (r_hi × F)
-    // are not copied: steps 1a-1c, their only readers, are done.
-    Bases b;
-    b.xi = b_.xi;
-    b.orthogonal = b_.orthogonal;
-    if (b.orthogonal) b.H = b_.H.topLeftCorner(r, r - 1);
-    b.q0 = b_.q0;
-    b.omega_scale = b_.omega_scale;
-    b.tustin = b_.tustin;
+    const Bases b = b_.for_steps_2_3(r);  // steps 1a-1c, the readers of Wu and Wy, are done
     check_input_excitation(d, b, R, r);
     return estimate_from_r(d, b, R, CY_.topLeftCorner(r * p, r * p), order, r, false);
   }
@@ -1256,20 +1263,22 @@ class ScreenedStep1 {
 // stays with its warning and one more saying every r was tried.
 // Fails: Error(Numerical) when every recomputed estimate fails.
 FrfResult choose_r(const FrfData& d, const FrfOptions& o, int order, std::vector<std::pair<int, double>>& scan) {
+  const auto by_v_sub = [](const std::pair<int, double>& a, const std::pair<int, double>& b) {
+    return a.second < b.second;
+  };
   std::map<int, FrfResult> recomputed;
   std::set<int> unusable;
   std::string last_error;
   for (;;) {
     auto least = scan.end();
     for (auto it = scan.begin(); it != scan.end(); ++it)
-      if (!unusable.count(it->first) && (least == scan.end() || it->second < least->second)) least = it;
+      if (!unusable.count(it->first) && (least == scan.end() || by_v_sub(*it, *least))) least = it;
     if (least == scan.end()) break;
     const int r = least->first;
     if (const auto done = recomputed.find(r); done != recomputed.end()) {
       FrfResult res = std::move(done->second);
       // The least V_SUB listed, when it is not this one, is an unusable estimate's.
-      const auto overall = std::min_element(scan.begin(), scan.end(),
-                                            [](const auto& a, const auto& b) { return a.second < b.second; });
+      const auto overall = std::min_element(scan.begin(), scan.end(), by_v_sub);
       if (overall->first != r) {
         const FrfResult& u = recomputed.at(overall->first);
         const double error = u.usability_estimate();
@@ -1297,8 +1306,7 @@ FrfResult choose_r(const FrfData& d, const FrfOptions& o, int order, std::vector
   }
   if (scan.empty())
     fail(ErrorKind::Numerical, "r selection", "every r the search screened failed when recomputed; last: " + last_error);
-  const auto overall = std::min_element(scan.begin(), scan.end(),
-                                        [](const auto& a, const auto& b) { return a.second < b.second; });
+  const auto overall = std::min_element(scan.begin(), scan.end(), by_v_sub);
   FrfResult res = std::move(recomputed.at(overall->first));
   res.warnings.push_back("no r the search tried (" + std::to_string(scan.size()) +
                          " values) gives an estimate usable in double precision; the least V_SUB's is kept");
