@@ -412,6 +412,23 @@ TEST(FrfWarnings, AnUnstableEstimateIsNamed) {
   for (const std::string& s : stable.warnings) EXPECT_EQ(s.find("unstable"), std::string::npos) << s;
 }
 
+// V_SUB (Eq. 35) of a model with a pole on the data's frequency axis: the
+// residual there is infinite (G is; with U = 1 the product inf · 1 has a NaN
+// imaginary part, and a NaN V_SUB would lose every comparison of the r
+// search, so that it could be chosen), finite without that frequency.
+TEST(FrfVSub, APoleOnTheFrequencyAxisGivesAnInfiniteVSub) {
+  StateSpace sys;  // G(z) = 1/(z - 1): a pole at z = 1, omega = 0
+  sys.A = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  sys.B = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  sys.C = Eigen::MatrixXd::Constant(1, 1, 1.0);
+  sys.D = Eigen::MatrixXd::Zero(1, 1);
+  const std::vector<Eigen::MatrixXcd> G(3, Eigen::MatrixXcd::Constant(1, 1, cplx(0.5, -0.25)));
+  const FrfData on_pole = frf_data(Domain::Discrete, Eigen::Vector3d(0.0, 0.5, 1.0), G);
+  EXPECT_EQ(v_sub(sys, on_pole), std::numeric_limits<double>::infinity());
+  const FrfData off_pole = frf_data(Domain::Discrete, Eigen::Vector3d(0.25, 0.5, 1.0), G);
+  EXPECT_TRUE(std::isfinite(v_sub(sys, off_pole)));
+}
+
 // ---------------------------------------------------------------------------
 // Automatic order and r (Section 5)
 
