@@ -508,9 +508,9 @@ Step1 step1c(const FrfData& d, const Bases& b, const Eigen::MatrixXd& R, Eigen::
   return s;
 }
 
-// Step 1 (a-c): size checks, R of Zᵀ (1a-1b), C_Y and the whitened SVD (1c).
+// Step 1 (a-c) on bases checked at r (checked_bases): R of Zᵀ (1a-1b), C_Y
+// and the whitened SVD (1c).
 Step1 step1(const FrfData& d, const Bases& b, int r) {
-  step1_check_size(d, b, r);
   return step1c(d, b, step1ab_qr(d, b, r), step1c_noise_covariance(d, b, r), r);
 }
 
