@@ -244,6 +244,12 @@ TEST_F(Conformance, BadInputIsRefusedBeforeAnyCandidateRuns) {
     EXPECT_TRUE(IsBadInput(run_fdsid({"conformance", "--suite", copy.string(), "--candidate", cand}),
                            {"field \"" + field + "\"", refusal}));
   }
+  // A required setting left out is named as missing, with the values it takes.
+  json no_kind = manifest;
+  no_kind["cases"][0].erase("kind");
+  std::ofstream(copy / "cases.json") << no_kind.dump(1);
+  EXPECT_TRUE(IsBadInput(run_fdsid({"conformance", "--suite", copy.string(), "--candidate", cand}),
+                         {"has no \"kind\"", "use spectrum, frf or records"}));
   EXPECT_FALSE(fs::exists(marker)) << "a candidate ran although the input was bad";
 }
 

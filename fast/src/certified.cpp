@@ -71,10 +71,12 @@ struct Fields {
       throw Error(ErrorKind::Input, where + " field \"" + key + "\"", "must be a positive number");
     return j[key].get<double>();
   }
-  // A value of `names` (`none` when the field is absent); else refused with
-  // the names, after `use`.
+  // A value of `names` (`none` when the field is absent; no `none`: the
+  // field is required); else refused with the names, after `use`.
   template <class E>
   E named(const char* key, const NameTable<E>& names, std::optional<E> none, const std::string& use = "use ") const {
+    if (!has(key) && !none)
+      throw Error(ErrorKind::Input, where, std::string("has no \"") + key + "\"; " + use + name_list(names));
     const std::optional<E> e = has(key) ? from_name(names, text(key)) : none;
     if (!e) throw Error(ErrorKind::Input, where + " field \"" + key + "\"", use + name_list(names));
     return *e;
@@ -89,7 +91,6 @@ CaseSpec spec_from_json(const json& j, const std::string& where) {
   s.tier = g.required_text("tier");
   if (s.tier != "lower" && s.tier != "average" && s.tier != "higher")
     throw Error(ErrorKind::Input, g.where + " field \"tier\"", "is \"" + s.tier + "\"; use lower, average or higher");
-  g.required_text("kind");  // absent: "has no "kind"", as the other required fields
   s.kind = g.named<CaseKind>("kind", case_kind_names(), {});
   s.description = g.text("description");
   s.made_by = g.text("made_by");
