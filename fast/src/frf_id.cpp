@@ -802,15 +802,15 @@ void for_each_weighted_residual(const StateSpace& model, const FrfData& d, Visit
 
 double v_sub(const StateSpace& model, const FrfData& d) {
   double v = 0;
-  for_each_weighted_residual(model, d, [&v](int, const auto& t) { v += t.sum(); });
+  for_each_weighted_residual(model, d, [&v](int, const Eigen::ArrayXXd& t) { v += t.sum(); });
   return v;
 }
 
 Eigen::VectorXd v_sub_terms(const StateSpace& model, const FrfData& d) {
   const Eigen::Index block = static_cast<Eigen::Index>(d.outputs()) * d.columns();
   Eigen::VectorXd terms(d.frequencies() * block);
-  for_each_weighted_residual(model, d, [&](int k, const auto& t) {
-    terms.segment(k * block, block) = Eigen::Map<const Eigen::VectorXd>(Eigen::ArrayXXd(t).data(), block);
+  for_each_weighted_residual(model, d, [&](int k, const Eigen::ArrayXXd& t) {
+    terms.segment(k * block, block) = Eigen::Map<const Eigen::VectorXd>(t.data(), block);
   });
   return terms;
 }
