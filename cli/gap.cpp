@@ -185,7 +185,8 @@ void print_report(Out& out, const GapReport& r, int periods) {
       << "\n";
   out << verdict_line(r) << "\n";
   out << "tests: p(gap) " << p_text(r.p_gap) << ", p(nonlinearity, " << r.unexcited << " unexcited lines) "
-      << p_text(r.p_nonlinearity) << ", p(leakage) " << p_text(r.p_leakage)
+      << p_text(r.p_nonlinearity) << " (predicted from the excited lines: " << p_text(r.p_nonlinearity_prediction)
+      << "), p(leakage) " << p_text(r.p_leakage)
       << (r.period_power.empty() ? std::string() : ", p(equal noise power per period) " + p_text(r.p_period_power))
       << "\n";
   out << distortion_line(r) << "\n";

@@ -284,6 +284,13 @@ struct GapReport {
   int periods_used = 0;                            ///< M after dropping transient periods
   int excited = 0, unexcited = 0;                  ///< lines in each test
   double p_gap = 1, p_nonlinearity = 1, p_leakage = 1;  ///< detection tests on the model as given
+  /// The nonlinearity's prediction test (the polynomial fitted on the excited
+  /// lines against the unexcited lines' mean residual; gap.cpp,
+  /// Diagnosis::nonlinearity_prediction_p) on the periods the selection starts
+  /// from (after a leading transient's). It admits a nonlinearity the test
+  /// above does not, at the first stage only and only where its fit beats
+  /// every linear effect's (a note says so). 1 with < 4 unexcited lines.
+  double p_nonlinearity_prediction = 1;
   /// Whether the periods after the first carry the same noise power
   /// (period_power_test below, on lines 1 … P/2): the tests above are
   /// derived for equal power and stay valid, if conservative, without it (a
