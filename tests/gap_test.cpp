@@ -619,16 +619,18 @@ TEST(GapDiagnosis, VerdictFollowsTheNumbersAndNeverWorseThanTheBestSingle) {
   EXPECT_GT(explained, 0);  // the checks above met the "explained" branch at least once
 }
 
-// Blind cases of gap-validate's classic schedule (P = 1024, M = 8; the seeds
+// Blind cases of gap-validate's classic schedule, or with `structure` of its
+// structure family (P = 1024, M = 8; the seeds
 // are the cases' own, `gap-validate --seed S` case i has seed S·1000003 + i)
 // that were named wrongly before the changes each names; every one is
 // identifiable at its noise level (the truth's own fit reaches gap ≈ 1 and the
 // confusion's does not, or costs more parameters than it saves).
-GapReport diagnose_case(std::vector<Effect> effects, Strength strength, std::uint64_t seed) {
+GapReport diagnose_case(std::vector<Effect> effects, Strength strength, std::uint64_t seed, bool structure = false) {
   GapCaseOptions o;
   o.effects = std::move(effects);
   o.strength = strength;
   o.seed = seed;
+  o.structure = structure;
   const GapCase c = make_gap_case(o);
   return diagnose_gap(c.sim_model, c.record, 1, c.meta);
 }
@@ -692,13 +694,7 @@ const EffectFit* candidate(const GapReport& r, Effect e) {
 // residual (Diagnosis::nonlinearity_prediction_p), and at the first stage,
 // where its fit beats every linear effect's, that test admits it.
 TEST(GapDiagnosis, AThinInLoopDistortionIsAdmittedByItsPrediction) {
-  GapCaseOptions o;
-  o.effects = {Effect::Nonlinearity};
-  o.strength = Strength::Subtle;
-  o.structure = true;
-  o.seed = 1000037;
-  const GapCase c = make_gap_case(o);
-  const GapReport r = diagnose_gap(c.sim_model, c.record, 1, c.meta);
+  const GapReport r = diagnose_case({Effect::Nonlinearity}, Strength::Subtle, 1000037, true);
   SCOPED_TRACE(verdict(r) + ", p_pred " + std::to_string(r.p_nonlinearity_prediction));
   ASSERT_GE(r.p_nonlinearity, r.options.alpha);  // the case is one the Fisher test misses
   EXPECT_LT(r.p_nonlinearity_prediction, r.options.alpha);
@@ -719,15 +715,10 @@ TEST(GapDiagnosis, AThinInLoopDistortionIsAdmittedByItsPrediction) {
 // excited lines gives the polynomial something to fit, and 1 % of null cases
 // fall below alpha anyway). The mode explains the excited lines far better
 // (gap 0.98 against the polynomial's 46), so it is chosen, and no
-// nonlinearity beside it: tested at every stage (before stop 68's form) the
-// prediction added one.
+// nonlinearity beside it (stop 67's prototype, which tested the prediction
+// at every stage, added one here).
 TEST(GapDiagnosis, APredictedDistortionBesideABetterLinearEffectIsNotAdded) {
-  GapCaseOptions o;
-  o.effects = {Effect::UnmodelledMode};
-  o.structure = true;
-  o.seed = 2000111;
-  const GapCase c = make_gap_case(o);
-  const GapReport r = diagnose_gap(c.sim_model, c.record, 1, c.meta);
+  const GapReport r = diagnose_case({Effect::UnmodelledMode}, Strength::Clear, 2000111, true);
   SCOPED_TRACE(verdict(r) + ", p_pred " + std::to_string(r.p_nonlinearity_prediction));
   ASSERT_LT(r.p_nonlinearity_prediction, r.options.alpha);  // the case is one where the test rejects
   EXPECT_GE(r.p_nonlinearity, r.options.alpha);
