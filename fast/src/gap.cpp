@@ -2287,7 +2287,9 @@ void conclude(const Spectra& s, const LineStats& st0, const Augment& a0, const A
       if (!bound) bound = gap_noise_bound(st1.M, static_cast<int>(K));
       if (!(c.gap_after < rep.gap_after - *bound)) continue;
       // The nonlinearity has a second test (ForwardSelection::admit): its
-      // p-value too, and, where it rejects, why it still was not taken.
+      // p-value too, and, where it rejects, why it still was not taken (a
+      // linear effect or leakage scored better at the first stage, or the
+      // polynomial did not improve the excited lines).
       const bool nl = c.effect() == Effect::Nonlinearity;
       const bool predicted = nl && rep.p_nonlinearity_prediction < level;
       rep.notes.push_back(
@@ -2295,7 +2297,7 @@ void conclude(const Spectra& s, const LineStats& st0, const Augment& a0, const A
           sci(rep.gap_after, 4) + (rep.present.empty() ? " of the model as given" : " the effects found leave") +
           (predicted ? ", and the polynomial fitted on the excited lines predicts the unexcited ones (p " +
                            sci(rep.p_nonlinearity_prediction, 3) + " at level " + fmt(level, 3) +
-                           "), but at the first stage a linear effect fitted the excited lines better"
+                           "), but the selection's first stage preferred another effect on the excited lines"
                      : ", but its own test does not admit it (p " + sci(c.p_value, 3) +
                            (nl ? "; predicted from the excited lines " + sci(rep.p_nonlinearity_prediction, 3) : "") +
                            " at level " + fmt(level, 3) + ")") +
