@@ -6,18 +6,18 @@
 #include <cmath>
 #include <functional>
 #include <limits>
-#include <random>
 #include <map>
 #include <optional>
+#include <random>
 #include <set>
 
 #include <boost/math/distributions/chi_squared.hpp>
 
 #include "fdsid/error.hpp"
+#include "fdsid/format.hpp"
 #include "numerics/complex.hpp"
 #include "numerics/constants.hpp"
 #include "numerics/fft.hpp"
-#include "fdsid/format.hpp"
 #include "numerics/qr.hpp"
 #include "numerics/rank.hpp"
 #include "numerics/eigen_instances.hpp"

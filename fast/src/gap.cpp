@@ -973,6 +973,32 @@ class Diagnosis {
     return best;
   }
 
+  // The nonlinearity's three forms (fit_nonlinearity): a static polynomial
+  // of the model's output G U (degrees 2, 3), of the input u (2, 3), or of
+  // the measured output y fed back through the model (in the loop, 1 … 3).
+  enum class NlForm { Output, Input, InLoop };
+  static std::vector<int> nl_degrees(NlForm form) {
+    return form == NlForm::InLoop ? std::vector<int>{1, 2, 3} : std::vector<int>{2, 3};
+  }
+  // The form's terms for a period's signal x (G U, u or y in time): the
+  // spectra of x^degree, one per degree of nl_degrees — the output form's as
+  // they are, the input form's through G, the in-loop form's through −G (fed
+  // back). Unscaled; powers by products (std::pow was a tenth of a diagnosis).
+  static std::vector<Eigen::VectorXcd> nl_terms(NlForm form, const Eigen::VectorXd& x, const Eigen::VectorXcd& G,
+                                                Fft& fft) {
+    const std::vector<int> degrees = nl_degrees(form);
+    std::vector<Eigen::VectorXcd> terms;
+    for (int degree : degrees) {
+      Eigen::VectorXd xd = x;
+      for (int e = 1; e < degree; ++e) xd.array() *= x.array();
+      Eigen::VectorXcd F = fft.forward(xd);
+      if (form == NlForm::Input) F = F.cwiseProduct(G);
+      if (form == NlForm::InLoop) F = -F.cwiseProduct(G);
+      terms.push_back(std::move(F));
+    }
+    return terms;
+  }
+
   // Nonlinear distortion, three forms, fitted on the excited and the
   // unexcited lines by weighted least squares; the one with the lowest
   // Schwarz score V + penalty · dof wins:
@@ -1021,9 +1047,8 @@ class Diagnosis {
     // its time on this VM; setZero on a matrix of the same size reallocates
     // nothing).
     thread_local std::vector<Eigen::MatrixXcd> Q;
-    enum Form { Output, Input, InLoop };
-    for (Form form : {Output, Input, InLoop}) {
-      const std::vector<int> degrees = form == InLoop ? std::vector<int>{1, 2, 3} : std::vector<int>{2, 3};
+    for (NlForm form : {NlForm::Output, NlForm::Input, NlForm::InLoop}) {
+      const std::vector<int> degrees = nl_degrees(form);
       const int q = static_cast<int>(degrees.size());
       if (Q.size() < static_cast<size_t>(q)) Q.resize(static_cast<size_t>(q));
       for (int d = 0; d < q; ++d) Q[d].setZero(s_.M, L);
@@ -1033,18 +1058,12 @@ class Diagnosis {
           for (int d = 0; d < q; ++d) Q[d].row(l) = Q[d].row(a.first);
           continue;
         }
-        const Eigen::VectorXd x = form == Output ? fft.inverse(G.cwiseProduct(U_mean))
-                                  : form == Input ? u_mean
-                                                  : y_mean;
+        const Eigen::VectorXd x = form == NlForm::Output ? fft.inverse(G.cwiseProduct(U_mean))
+                                  : form == NlForm::Input ? u_mean
+                                                          : y_mean;
         scale = std::max(scale, x.cwiseAbs().maxCoeff());
-        for (int d = 0; d < q; ++d) {
-          Eigen::VectorXd xd = x;  // x^degree by products (std::pow was a tenth of a diagnosis)
-          for (int e = 1; e < degrees[d]; ++e) xd.array() *= x.array();
-          Eigen::VectorXcd F = fft.forward(xd);
-          if (form == Input) F = F.cwiseProduct(G);
-          if (form == InLoop) F = -F.cwiseProduct(G);
-          Q[d].row(l) = F.transpose();
-        }
+        const std::vector<Eigen::VectorXcd> F = nl_terms(form, x, G, fft);
+        for (int d = 0; d < q; ++d) Q[d].row(l) = F[d].transpose();
       }
       if (!(scale > 0)) continue;
       const int K = static_cast<int>(lines.size());
@@ -1058,7 +1077,7 @@ class Diagnosis {
       w = pooled(w).cwiseInverse() * st.M;  // excited then unexcited lines: pooled within each run
       Eigen::VectorXd c;
       weighted_ls(Phi, st.mean, w, c);
-      Nonlinearity p{true, 0, 0, form == Input, form == InLoop, 0};
+      Nonlinearity p{true, 0, 0, form == NlForm::Input, form == NlForm::InLoop, 0};
       Trial t{a, {0, 0, q, 1, p}, 0};
       Eigen::MatrixXcd nl = Eigen::MatrixXcd::Zero(s_.M, L);
       for (int d = 0; d < q; ++d) {
@@ -1125,23 +1144,22 @@ class Diagnosis {
       for (int k : s_.exc) Z(k) = X(k);
       return Z;
     };
-    enum Form { Output, Input, InLoop };
     double best_score = std::numeric_limits<double>::infinity(), p = 1.0;
-    for (Form form : {Output, Input, InLoop}) {
-      const std::vector<int> degrees = form == InLoop ? std::vector<int>{1, 2, 3} : std::vector<int>{2, 3};
+    for (NlForm form : {NlForm::Output, NlForm::Input, NlForm::InLoop}) {
+      const std::vector<int> degrees = nl_degrees(form);
       const int q = static_cast<int>(degrees.size());
-      const Eigen::VectorXcd X = form == Output ? Eigen::VectorXcd(G.cwiseProduct(U_mean)) : form == Input ? U_mean : Y_mean;
+      const Eigen::VectorXcd X = form == NlForm::Output ? Eigen::VectorXcd(G.cwiseProduct(U_mean))
+                                 : form == NlForm::Input ? U_mean
+                                                         : Y_mean;
       const Eigen::VectorXd x = fft.inverse(excited_only(X));
       const double scale = x.cwiseAbs().maxCoeff();
       if (!(scale > 0)) continue;
+      const std::vector<Eigen::VectorXcd> F = nl_terms(form, x, G, fft);
       std::vector<Eigen::VectorXcd> Pe(q, Eigen::VectorXcd(s_.exc.size())), Pn(q, Eigen::VectorXcd(s_.ne.size()));
       for (int d = 0; d < q; ++d) {
-        Eigen::VectorXd xd = x / scale;
-        for (int e = 1; e < degrees[d]; ++e) xd.array() *= x.array() / scale;
-        Eigen::VectorXcd F = fft.forward(xd);
-        if (form != Output) F = F.cwiseProduct(G);  // the sign is the coefficient's
-        for (size_t i = 0; i < s_.exc.size(); ++i) Pe[d](i) = F(s_.exc[i]);
-        for (size_t i = 0; i < s_.ne.size(); ++i) Pn[d](i) = F(s_.ne[i]);
+        const double s = std::pow(scale, degrees[d]);
+        for (size_t i = 0; i < s_.exc.size(); ++i) Pe[d](i) = F[d](s_.exc[i]) / s;
+        for (size_t i = 0; i < s_.ne.size(); ++i) Pn[d](i) = F[d](s_.ne[i]) / s;
       }
       Eigen::VectorXd c;
       const double score = weighted_ls(Pe, se.mean, we, c) + penalty_ * q;
