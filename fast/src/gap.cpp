@@ -1857,6 +1857,13 @@ class ForwardSelection {
         --stage;
         continue;
       }
+      if (!best && single) {
+        if (std::optional<std::pair<size_t, Stage>> pair = pair_beats_single(cur, alone)) {
+          path.back() = *alone[pair->first];  // the pair's first member, then the pair
+          path.push_back(std::move(pair->second));
+          continue;
+        }
+      }
       if (!best) break;
       path.push_back(exchanged(cur, std::move(*best)));
     }
@@ -2147,6 +2154,51 @@ class ForwardSelection {
   // The relevance rule: a step from gap g_from to g_to must remove min_share
   // of the excess gap g_from − 1 (or of the noise bound `floor` of the
   // stage's periods, when the excess is below it).
+  // A pair the greedy order cannot reach: the single linear effect e of
+  // `cur` (stage 1) would be the verdict, no addition to it admitted, while
+  // two other linear effects g, h — each admitted alone, neither the best
+  // alone — explain the record better jointly. A parallel mode's constant
+  // term is a gain, so a series mode fitted alone can take a mode_mismatch
+  // plus a gain_error (gap-validate seed 1 case 18: the mode alone 0.82,
+  // mode_mismatch alone 2.0; the pair, never tried, since the greedy builds
+  // on the best single). The pair is taken when each member passes, on the
+  // joint fit, the test an addition passes (F-test at effect_alpha against
+  // the other alone, relevance, the gap rule — h by admit, g here) and its
+  // Schwarz criterion (the rule that orders the stages, so a richer pair pays
+  // for its parameters) is below e's by more than 1 in units of V (2 ln B >
+  // 2, past "not worth more than a bare mention" on Kass and Raftery's scale,
+  // the width equivalents() gives a tie): the greedy order chose e, and only
+  // positive evidence overturns it for a set it never built. With the
+  // criterion merely lower, two subtle unmodelled modes became delay +
+  // mode_mismatch (gap-validate --continuous seed 1 case 192, structure
+  // seed 5 case 252). Returns the index of the member to stand as stage 1
+  // (the lower criterion alone) and the pair's stage.
+  std::optional<std::pair<size_t, Stage>> pair_beats_single(
+      const Stage& cur, const std::array<std::optional<Stage>, kAllEffects.size()>& alone) const {
+    std::vector<std::pair<size_t, size_t>> pairs;
+    auto candidate = [&](size_t i) {
+      return is_linear(kAllEffects[i]) && kAllEffects[i] != cur.linear[0] && alone[i] && alone[i]->admitted;
+    };
+    for (size_t i = 0; i < kAllEffects.size(); ++i)
+      for (size_t j = 0; j < kAllEffects.size(); ++j)
+        if (candidate(i) && candidate(j) && score(*alone[i]) < score(*alone[j])) pairs.emplace_back(i, j);
+    const double K = static_cast<double>(s_.exc.size());
+    std::vector<std::optional<Stage>> fitted(pairs.size());
+    on_two_workers(pairs.size(), [&](size_t k) { fitted[k] = admit(*alone[pairs[k].first], kAllEffects[pairs[k].second]); });
+    std::optional<std::pair<size_t, Stage>> out;
+    for (size_t k = 0; k < pairs.size(); ++k) {
+      if (!fitted[k] || !fitted[k]->admitted) continue;
+      if (!((score(cur) - score(*fitted[k])) * K > 1) || (out && !(score(*fitted[k]) < score(out->second)))) continue;
+      const Effect g = kAllEffects[pairs[k].first];
+      const Stage& h = *alone[pairs[k].second];
+      const Stage& both = *fitted[k];
+      const double p = dg_.searched_p(g, dg_.f_test(h.V, both.V, std::max(1, both.q - h.q), both.q));
+      if (p < admission_level(g, o_) && relevant(h.gap, both.gap, floor(h)) && both.gap <= h.gap + floor(both))
+        out.emplace(pairs[k].first, both);
+    }
+    return out;
+  }
+
   bool relevant(double g_from, double g_to, double floor) const {
     return g_from - g_to >= o_.min_share * std::max(g_from - 1, floor);
   }
