@@ -2151,9 +2151,6 @@ class ForwardSelection {
     return st;
   }
 
-  // The relevance rule: a step from gap g_from to g_to must remove min_share
-  // of the excess gap g_from − 1 (or of the noise bound `floor` of the
-  // stage's periods, when the excess is below it).
   // A pair the greedy order cannot reach: the single linear effect e of
   // `cur` (stage 1) would be the verdict, no addition to it admitted, while
   // two other linear effects g, h — each admitted alone, neither the best
@@ -2199,6 +2196,9 @@ class ForwardSelection {
     return out;
   }
 
+  // The relevance rule: a step from gap g_from to g_to must remove min_share
+  // of the excess gap g_from − 1 (or of the noise bound `floor` of the
+  // stage's periods, when the excess is below it).
   bool relevant(double g_from, double g_to, double floor) const {
     return g_from - g_to >= o_.min_share * std::max(g_from - 1, floor);
   }
