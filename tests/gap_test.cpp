@@ -743,7 +743,7 @@ TEST(GapDiagnosis, APairTheGreedyOrderMissesIsFound) {
   EXPECT_EQ(r.verdict, GapVerdict::Explained);
   EXPECT_LT(r.gap_after, 2.0);
   ASSERT_EQ(r.path.size(), 2u);
-  EXPECT_EQ(to_string(r.path[0].added), "mode_mismatch");
+  EXPECT_STREQ(to_string(r.path[0].added), "mode_mismatch");  // a C string: STREQ, not pointer equality
   EXPECT_TRUE(r.alternatives.empty());
 }
 
