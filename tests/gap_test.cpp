@@ -747,6 +747,30 @@ TEST(GapDiagnosis, APairTheGreedyOrderMissesIsFound) {
   EXPECT_TRUE(r.alternatives.empty());
 }
 
+// Issue 17: an exchange whose set no longer holds the first effect is tested
+// member by member. gap-validate seed 3, case 98 (seed 3000107): a clear gain
+// of 0.80 and a 0.26-sample delay. Alone a series unmodelled_mode takes most
+// of both (gap 0.97: its factor's constant term is a gain; the gain alone
+// leaves 6.2, the delay 28), then the delay is added (0.86). Exchanging the
+// mode for the gain lowers the Schwarz criterion (4 parameters fewer), but
+// until stop 70 the exchanged pair was tested against the mode alone — sets
+// that are not nested, and the pair lowers V little below the mode's — and
+// was refused: the verdict was delay + unmodelled_mode. Now each member is
+// tested beside the other alone (the gain against the delay alone, the
+// delay against the gain alone), as an addition is.
+TEST(GapDiagnosis, AnExchangedPairIsTestedMemberByMember) {
+  const GapReport r = diagnose_case({Effect::Delay, Effect::GainError}, Strength::Clear, 3000107);
+  SCOPED_TRACE(verdict(r));
+  std::vector<std::string> present = names(r.present);
+  std::sort(present.begin(), present.end());
+  EXPECT_EQ(present, (std::vector<std::string>{"delay", "gain_error"}));
+  EXPECT_EQ(r.verdict, GapVerdict::Explained);
+  EXPECT_LT(r.gap_after, 2.0);
+  ASSERT_EQ(r.path.size(), 2u);
+  EXPECT_STREQ(to_string(r.path[0].added), "unmodelled_mode");  // the greedy's first step, then exchanged
+  for (const EffectFit& f : r.chosen) EXPECT_LT(f.p_value, r.options.effect_alpha) << to_string(f.effect());
+}
+
 // Issue 17: an unexplained gap must not hide a candidate that explains it
 // better. gap-validate --family structure seed 2, case 102 (seed 2000108): a
 // clear gain error, every candidate's test at p ≥ 1e-80, diagnosed at an
