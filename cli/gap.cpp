@@ -200,6 +200,16 @@ void print_report(Out& out, const GapReport& r, int periods) {
     }
     out << "\n";
   }
+  if (!r.alternative_pairs.empty()) {
+    out << "indistinguishable here:";
+    const char* sep = " ";
+    for (const auto& [g, h] : r.alternative_pairs) {
+      out << sep << fdsid::to_string(g) << " + " << fdsid::to_string(h) << " jointly explain the record as well as "
+          << linear_chosen(r) << " (each significant beside the other)";
+      sep = "; ";
+    }
+    out << "\n";
+  }
   if (!r.possible_additions.empty()) {
     const std::string e = linear_chosen(r);
     out << "possibly also here:";

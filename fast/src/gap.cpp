@@ -1806,15 +1806,16 @@ class ForwardSelection {
   // The stages taken, from the model as given (stage 0) to the chosen set;
   // `best_single`: of the effects admitted alone (stage 1), the one leaving
   // the least gap.
-  // `alternatives`, `additions`: see GapReport::alternatives and
-  // ::possible_additions, for the stage-1 linear effect, from the fits the
-  // selection made anyway (each effect alone at stage 1, each added to it at
-  // stage 2).
+  // `alternatives`, `additions`, `pair_ties`: see GapReport::alternatives,
+  // ::possible_additions and ::alternative_pairs, for the stage-1 linear
+  // effect, from the fits the selection made anyway (each effect alone at
+  // stage 1, each added to it at stage 2, the pairs of pair_beats_single).
   // `base`: the stage the free selection starts from (0, or 1 after a
   // leading leakage); best_single, alternatives and additions are taken
   // relative to it.
   std::vector<Stage> run(std::optional<Stage>& best_single, std::vector<std::pair<Effect, double>>& alternatives,
-                         std::vector<std::pair<Effect, double>>& additions, size_t& base) const {
+                         std::vector<std::pair<Effect, double>>& additions,
+                         std::vector<std::array<Effect, 2>>& pair_ties, size_t& base) const {
     std::vector<Stage> path{evaluate(Stage{})};
     if (leakage_first_) path.push_back(leakage_stage(path.front()));
     base = path.size() - 1;
@@ -1858,7 +1859,7 @@ class ForwardSelection {
         continue;
       }
       if (!best && single) {
-        if (std::optional<std::pair<size_t, Stage>> pair = pair_beats_single(cur, alone)) {
+        if (std::optional<std::pair<size_t, Stage>> pair = pair_beats_single(cur, alone, pair_ties)) {
           path.back() = *alone[pair->first];  // the pair's first member, then the pair
           path.push_back(std::move(pair->second));
           continue;
@@ -2201,9 +2202,13 @@ class ForwardSelection {
   // criterion merely lower, two subtle unmodelled modes became delay +
   // mode_mismatch (gap-validate --continuous seed 1 case 192, structure
   // seed 5 case 252). Returns the index of the member to stand as stage 1
-  // (the lower criterion alone) and the pair's stage.
+  // (the lower criterion alone) and the pair's stage; `ties` gets the pairs
+  // that pass the same tests with a criterion within 1 of e's either way
+  // (2 ln B ≤ 2): sets the record cannot tell from e (GapReport::
+  // alternative_pairs), read only where e stays the verdict.
   std::optional<std::pair<size_t, Stage>> pair_beats_single(
-      const Stage& cur, const std::array<std::optional<Stage>, kAllEffects.size()>& alone) const {
+      const Stage& cur, const std::array<std::optional<Stage>, kAllEffects.size()>& alone,
+      std::vector<std::array<Effect, 2>>& ties) const {
     std::vector<std::pair<size_t, size_t>> pairs;
     auto candidate = [&](size_t i) {
       return is_linear(kAllEffects[i]) && kAllEffects[i] != cur.linear[0] && alone[i] && alone[i]->admitted;
@@ -2215,15 +2220,20 @@ class ForwardSelection {
     std::vector<std::optional<Stage>> fitted(pairs.size());
     on_two_workers(pairs.size(), [&](size_t k) { fitted[k] = admit(*alone[pairs[k].first], kAllEffects[pairs[k].second]); });
     std::optional<std::pair<size_t, Stage>> out;
+    ties.clear();
     for (size_t k = 0; k < pairs.size(); ++k) {
       if (!fitted[k] || !fitted[k]->admitted) continue;
-      if (!((score(cur) - score(*fitted[k])) * K > 1) || (out && !(score(*fitted[k]) < score(out->second)))) continue;
+      const double lower_by = (score(cur) - score(*fitted[k])) * K;
+      if (!(lower_by >= -1) || (out && !(score(*fitted[k]) < score(out->second)))) continue;
       const Effect g = kAllEffects[pairs[k].first];
       const Stage& h = *alone[pairs[k].second];
       const Stage& both = *fitted[k];
       const double p = dg_.searched_p(g, dg_.f_test(h.V, both.V, std::max(1, both.q - h.q), both.q));
-      if (p < admission_level(g, o_) && relevant(h.gap, both.gap, floor(h)) && both.gap <= h.gap + floor(both))
+      if (!(p < admission_level(g, o_) && passes(h, both))) continue;
+      if (lower_by > 1)
         out.emplace(pairs[k].first, both);
+      else
+        ties.push_back({g, kAllEffects[pairs[k].second]});
     }
     return out;
   }
@@ -2263,8 +2273,9 @@ Augment choose_effects(const Diagnosis& dg, const Spectra& s, const Augment& a0,
   rep.p_nonlinearity_prediction = sel.p_prediction();
   std::optional<Stage> best_single;
   std::vector<std::pair<Effect, double>> alternatives, additions;
+  std::vector<std::array<Effect, 2>> pair_ties;
   size_t base = 0;
-  std::vector<Stage> path = sel.run(best_single, alternatives, additions, base);
+  std::vector<Stage> path = sel.run(best_single, alternatives, additions, pair_ties, base);
   if (base > 0)
     rep.notes.push_back("leakage: the first " + std::to_string(path[base].first) +
                         " period(s) carry a transient (p " + sci(rep.p_leakage, 2) +
@@ -2314,6 +2325,7 @@ Augment choose_effects(const Diagnosis& dg, const Spectra& s, const Augment& a0,
       path[base + 1].linear[0] == last.linear[0]) {
     rep.alternatives = alternatives;
     rep.possible_additions = additions;
+    rep.alternative_pairs = pair_ties;
   }
   return path.back().state;
 }
@@ -2618,6 +2630,8 @@ nlohmann::json gap_report_to_json(const GapReport& r) {
   for (const auto& [e, p] : r.alternatives) j["alternatives"].push_back({{"effect", to_string(e)}, {"p_value", p}});
   j["stand_ins"] = nlohmann::json::array();
   for (Effect e : r.stand_ins) j["stand_ins"].push_back(to_string(e));
+  j["alternative_pairs"] = nlohmann::json::array();
+  for (const auto& [g, h] : r.alternative_pairs) j["alternative_pairs"].push_back({to_string(g), to_string(h)});
   j["possible_additions"] = nlohmann::json::array();
   for (const auto& [e, p] : r.possible_additions)
     j["possible_additions"].push_back({{"effect", to_string(e)}, {"p_value", p}});

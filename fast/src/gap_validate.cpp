@@ -97,7 +97,15 @@ GapValidationCase run_case(const GapValidationOptions& o, int i, const std::file
         if (is_linear(e)) e = alt.first;
       r.correct_up_to_alternatives = r.correct_up_to_alternatives || joined(swapped) == r.truth;
     }
-    r.named_alternatives = static_cast<int>(rep.alternatives.size() + rep.possible_additions.size());
+    for (const auto& [g, h] : rep.alternative_pairs) {  // the one linear effect swapped for a pair
+      std::vector<Effect> swapped = rep.present;
+      for (Effect& e : swapped)
+        if (is_linear(e)) e = g;
+      swapped.push_back(h);
+      r.correct_up_to_alternatives = r.correct_up_to_alternatives || joined(swapped) == r.truth;
+    }
+    r.named_alternatives =
+        static_cast<int>(rep.alternatives.size() + rep.alternative_pairs.size() + rep.possible_additions.size());
     for (const auto& add : rep.possible_additions) {  // an effect the report says may be there too
       std::vector<Effect> with = rep.present;
       with.push_back(add.first);

@@ -269,6 +269,13 @@ struct GapReport {
   /// (a delay and a high-cut-off low-pass, say). With the p-value of adding
   /// e to g.
   std::vector<std::pair<Effect, double>> alternatives;
+  /// When one linear effect e is present: pairs g, h of other linear
+  /// effects, each admitted alone, that jointly explain the record as well —
+  /// each passes an addition's test beside the other alone (F-test at
+  /// effect_alpha, relevance, gap rule) and the pair's Schwarz criterion is
+  /// within 1 of e's either way (2 ln B ≤ 2). Where it is lower by more, the
+  /// pair is the verdict instead (ForwardSelection::pair_beats_single).
+  std::vector<std::array<Effect, 2>> alternative_pairs;
   /// When one linear effect e is present: the linear effects g that, fitted
   /// jointly beside e, explain the record as well as e alone — the pair's
   /// Schwarz criterion within 1 of e's (2 ln B ≤ 2) — and adding g is not
