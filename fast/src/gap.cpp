@@ -1928,11 +1928,7 @@ class ForwardSelection {
     }
     next.admitted = next.gap <= cur.gap + floor(next) && !(next.by_prediction && !next.distortion_fitted);
     if (is_linear(e)) {
-      // At least one parameter: the joint refit can lower another effect's
-      // order (a second-order sensor becomes first order beside a delay), and
-      // q ≤ 0 would make the test say p = 1 for any decrease (as exchanged()).
-      const int q = std::max(1, next.q - cur.q);
-      p = dg_.searched_p(e, dg_.f_test(cur.V, next.V, q, next.q));
+      p = addition_p(e, cur, next);
       next.admitted = next.admitted && p < admission_level(e, o_) && relevant(cur.gap, next.gap, floor(cur));
     }
     for (EffectFit& f : next.fits)
@@ -2072,7 +2068,7 @@ class ForwardSelection {
         alt.linear.insert(alt.linear.begin() + static_cast<std::ptrdiff_t>(i), g);
         alt = evaluate(std::move(alt));
         if (!(score(alt) < score(next))) continue;
-        const double p = dg_.searched_p(g, dg_.f_test(cur.V, alt.V, std::max(1, alt.q - cur.q), alt.q));
+        const double p = addition_p(g, cur, alt);
         if (p < o_.effect_alpha && passes(cur, alt)) {
           for (EffectFit& f : alt.fits)
             if (f.effect() == g || f.effect() == added) f.p_value = p;
@@ -2084,7 +2080,7 @@ class ForwardSelection {
         for (size_t k = 0; k < alt.linear.size() && each_pays; ++k) {
           const Effect m = alt.linear[k];
           const Stage other = evaluate(without(alt, m));
-          ps.push_back(dg_.searched_p(m, dg_.f_test(other.V, alt.V, std::max(1, alt.q - other.q), alt.q)));
+          ps.push_back(addition_p(m, other, alt));
           each_pays = ps.back() < admission_level(m, o_) && passes(other, alt);
         }
         if (!each_pays) continue;
@@ -2103,6 +2099,15 @@ class ForwardSelection {
     out.fits.erase(std::remove_if(out.fits.begin(), out.fits.end(), [&](const EffectFit& f) { return f.effect() == m; }),
                    out.fits.end());
     return out;
+  }
+
+  // The addition's F-test of the linear effect m on the step from `from` to
+  // `to` (which holds m), with m's search accounted for (searched_p). At
+  // least one parameter: the joint refit can lower another effect's order (a
+  // second-order sensor becomes first order beside a delay), and q ≤ 0 would
+  // make the test say p = 1 for any decrease.
+  double addition_p(Effect m, const Stage& from, const Stage& to) const {
+    return dg_.searched_p(m, dg_.f_test(from.V, to.V, std::max(1, to.q - from.q), to.q));
   }
 
   // The gap rule and the relevance rule of a step from `from` to `to`.
@@ -2228,7 +2233,7 @@ class ForwardSelection {
       const Effect g = kAllEffects[pairs[k].first];
       const Stage& h = *alone[pairs[k].second];
       const Stage& both = *fitted[k];
-      const double p = dg_.searched_p(g, dg_.f_test(h.V, both.V, std::max(1, both.q - h.q), both.q));
+      const double p = addition_p(g, h, both);
       if (!(p < admission_level(g, o_) && passes(h, both))) continue;
       if (lower_by > 1)
         out.emplace(pairs[k].first, both);
