@@ -797,6 +797,24 @@ TEST(GapDiagnosis, AnExchangedPairIsTestedMemberByMember) {
   for (const EffectFit& f : r.chosen) EXPECT_LT(f.p_value, r.options.effect_alpha) << to_string(f.effect());
 }
 
+// Issue 17: a series mode's DC gain is named as a gain error. gap-validate
+// classic seed 4, case 18 (seed 4000030): a clear gain error beside a series
+// unmodelled mode. The free series factor d + c/(ξ−λ) + c̄/(ξ−λ̄) is exactly
+// its DC value times a unit-DC resonance, so the mode alone took the gain
+// too (verdict unmodelled_mode, gap 0.69, until stop 71; 27 such pairs in
+// 7200 gap-validate cases). ForwardSelection::gain_split tests the gain, on
+// one degree of freedom at effect_alpha, against the set with the mode held
+// at unit DC: the path shows the mode (gap 0.69), then its gain (0.71: the
+// same function class refitted jointly, within the gap rule's noise bound).
+// Checked to fail with gain_split's call removed (verdict unmodelled_mode).
+TEST(GapDiagnosis, ASeriesModesDcGainIsAGainErrorOfItsOwn) {
+  const GapReport r = diagnose_case({Effect::UnmodelledMode, Effect::GainError}, Strength::Clear, 4000030);
+  SCOPED_TRACE(verdict(r));
+  expect_pair_explained(r, {"gain_error", "unmodelled_mode"}, "unmodelled_mode");
+  EXPECT_EQ(r.path[1].added, Effect::GainError);
+  EXPECT_LT(r.path[1].p_value, r.options.effect_alpha);
+}
+
 // Issue 17: an unexplained gap must not hide a candidate that explains it
 // better. gap-validate --family structure seed 2, case 102 (seed 2000108): a
 // clear gain error, every candidate's test at p ≥ 1e-80, diagnosed at an
