@@ -1460,13 +1460,14 @@ TEST(GapDiagnosis, ANonlinearityTermIsTheSameInEveryPeriod) {
   const double a2 = param(r, "nonlinearity", "a2"), a3 = param(r, "nonlinearity", "a3");
   const int first = kM - r.periods_used, M = r.periods_used;
   numerics::UnitaryFft fft(kP);
-  Eigen::MatrixXcd U(kP, M), Y(kP, M);  // unitary DFTs of each used period (x̄'s scale is the time signal's)
+  constexpr int kLines = kP / 2 + 1;  // UnitaryFft::forward returns the lines 0 … P/2 of a real signal
+  Eigen::MatrixXcd U(kLines, M), Y(kLines, M);  // unitary DFTs of each used period (x̄'s scale is the time signal's)
   for (int l = 0; l < M; ++l) {
     U.col(l) = fft.forward(Eigen::VectorXd(rec.col(0).segment((first + l) * kP, kP)));
     Y.col(l) = fft.forward(Eigen::VectorXd(rec.col(1).segment((first + l) * kP, kP)));
   }
-  Eigen::VectorXcd G(kP);
-  for (int k = 0; k < kP; ++k) G(k) = transfer(g, std::polar(1.0, 2 * M_PI * k / kP))(0, 0);
+  Eigen::VectorXcd G(kLines);
+  for (int k = 0; k < kLines; ++k) G(k) = transfer(g, std::polar(1.0, 2 * M_PI * k / kP))(0, 0);
   const Eigen::VectorXd x = fft.inverse(G.cwiseProduct(U.rowwise().mean()));
   const Eigen::VectorXcd N = a2 * fft.forward(Eigen::VectorXd(x.array().square())) +
                              a3 * fft.forward(Eigen::VectorXd(x.array().cube()));
