@@ -1764,7 +1764,6 @@ struct Stage {
   bool distortion_fitted = true;    // the static polynomial is part of the fit (see ForwardSelection::admit)
   bool by_prediction = false;       // the nonlinearity admitted by its prediction test (ForwardSelection::admit)
   bool admitted = true;             // the last addition passed its tests
-  bool series_at_unit_dc = false;   // a series mode held at unit DC gain without a gain_error (gain_split)
   Augment state;
   std::vector<EffectFit> fits;      // every effect of the set, in the order added
   double V = std::numeric_limits<double>::infinity();  // pooled cost on the excited lines
@@ -1925,8 +1924,7 @@ class ForwardSelection {
   // two linear effects already, no transient or no unexcited lines, or
   // leakage's or nonlinearity's test does not reject).
   std::optional<Stage> admit(const Stage& cur, Effect e) const {
-    const bool in = std::find(cur.linear.begin(), cur.linear.end(), e) != cur.linear.end();
-    if (in || (e == Effect::Leakage && cur.first > 0) || (e == Effect::Nonlinearity && cur.nonlinear)) return {};
+    if (holds(cur, e) || (e == Effect::Leakage && cur.first > 0) || (e == Effect::Nonlinearity && cur.nonlinear)) return {};
     Stage next = cur;
     double p = 1;
     if (e == Effect::Leakage) {
@@ -2027,9 +2025,8 @@ class ForwardSelection {
     if (e != Effect::SensorDynamics || !alone[is] || !alone[id] || !pairs[id]) return false;
     const Stage& delay = *alone[id];
     if (!delay.admitted || delay.q >= alone[is]->q) return false;
-    const auto lag = std::find_if(delay.fits.begin(), delay.fits.end(),
-                                  [](const EffectFit& f) { return f.effect() == Effect::Delay; });
-    if (lag == delay.fits.end() || !(std::get<Delay>(lag->parameters).samples > 0)) return false;
+    const EffectFit* lag = fit_of(delay, Effect::Delay);
+    if (!lag || !(std::get<Delay>(lag->parameters).samples > 0)) return false;
     const Stage& pair = *pairs[id];
     return dg_.f_test(delay.V, pair.V, std::max(1, pair.q - delay.q), pair.q) >= o_.effect_alpha;
   }
@@ -2095,7 +2092,7 @@ class ForwardSelection {
     const Effect added = next.linear.back();
     for (size_t i = 0; i + 1 < next.linear.size(); ++i)
       for (Effect g : kLinearEffects) {
-        if (std::find(next.linear.begin(), next.linear.end(), g) != next.linear.end()) continue;
+        if (holds(next, g)) continue;
         Stage alt = without(next, next.linear[i]);
         alt.linear.insert(alt.linear.begin() + static_cast<std::ptrdiff_t>(i), g);
         alt = evaluate(std::move(alt));
@@ -2122,6 +2119,17 @@ class ForwardSelection {
         next = std::move(alt);
       }
     return next;
+  }
+
+  // Whether the stage's linear set holds e.
+  static bool holds(const Stage& st, Effect e) {
+    return std::find(st.linear.begin(), st.linear.end(), e) != st.linear.end();
+  }
+
+  // The stage's fit of the effect e; null when e is not in the stage.
+  static const EffectFit* fit_of(const Stage& st, Effect e) {
+    const auto f = std::find_if(st.fits.begin(), st.fits.end(), [&](const EffectFit& x) { return x.effect() == e; });
+    return f == st.fits.end() ? nullptr : &*f;
   }
 
   // `st` without the linear effect m (its fit dropped; not refitted).
@@ -2162,16 +2170,10 @@ class ForwardSelection {
   // nonlinearity + unmodelled_mode pairs and fixed none with a
   // nonlinearity).
   std::optional<Stage> gain_split(const Stage& last) const {
-    const auto in_set = [&](Effect e) { return std::find(last.linear.begin(), last.linear.end(), e) != last.linear.end(); };
-    if (last.linear.size() >= kMaxLinear || last.nonlinear || in_set(Effect::GainError) ||
-        !in_set(Effect::UnmodelledMode))
-      return std::nullopt;
-    const auto mode = std::find_if(last.fits.begin(), last.fits.end(),
-                                   [](const EffectFit& f) { return f.effect() == Effect::UnmodelledMode; });
-    if (mode == last.fits.end() || !std::get<UnmodelledMode>(mode->parameters).series) return std::nullopt;
-    Stage unit = last;
-    unit.series_at_unit_dc = true;
-    unit = evaluate(std::move(unit));
+    if (last.linear.size() >= kMaxLinear || last.nonlinear || holds(last, Effect::GainError)) return std::nullopt;
+    const EffectFit* mode = fit_of(last, Effect::UnmodelledMode);
+    if (!mode || !std::get<UnmodelledMode>(mode->parameters).series) return std::nullopt;
+    const Stage unit = evaluate(last, /*series_at_unit_dc=*/true);
     Stage split = last;
     split.linear.push_back(Effect::GainError);
     split = evaluate(std::move(split));
@@ -2189,10 +2191,12 @@ class ForwardSelection {
 
   // The stage's state, fits and cost: the linear set fitted jointly on the
   // model as given with the stage's periods, then the nonlinear distortion.
-  Stage evaluate(Stage st) const {
+  // series_at_unit_dc: a series unmodelled_mode held at unit DC gain without
+  // a gain_error beside it (gain_split's reference fit; Augment).
+  Stage evaluate(Stage st, bool series_at_unit_dc = false) const {
     Augment a = a0_;
     a.first = st.first;
-    a.series_at_unit_dc = st.series_at_unit_dc;
+    a.series_at_unit_dc = series_at_unit_dc;
     // With nonlinear distortion in the set: the distortion fitted on the bare
     // model first, the linear effects fitted on the target without it, then
     // the distortion refitted on top (fitting the linear effects to a target
