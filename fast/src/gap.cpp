@@ -730,7 +730,7 @@ class Diagnosis {
   // ForwardSelection::gain_split asks whether a series mode's DC gain is a
   // gain error of its own.
   enum class Constant { None, Free, UnitDc };
-  static int mode_dof(Constant k) { return k == Constant::None || k == Constant::UnitDc ? 4 : 5; }
+  static int mode_dof(Constant k) { return k == Constant::Free ? 5 : 4; }
   cplx dc_point() const { return model_.domain == Domain::Discrete ? cplx(1, 0) : cplx(0, 0); }
   // The pole terms 1/(ξ−λ), 1/(ξ−λ̄) at ξ, less their DC values for UnitDc.
   std::pair<cplx, cplx> pole_terms(cplx xi, cplx lambda, Constant k) const {

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <thread>
@@ -91,26 +92,20 @@ GapValidationCase run_case(const GapValidationOptions& o, int i, const std::file
     const RecordMeta meta = read_meta(meta_path);
     const GapReport rep = diagnose_gap(model, rec, inputs, meta, o.gap);
     r.verdict = joined(rep.present);
-    for (const auto& alt : rep.alternatives) {  // the one linear effect of the verdict swapped
-      std::vector<Effect> swapped = rep.present;
-      for (Effect& e : swapped)
-        if (is_linear(e)) e = alt.first;
-      r.correct_up_to_alternatives = r.correct_up_to_alternatives || joined(swapped) == r.truth;
-    }
-    for (const auto& [g, h] : rep.alternative_pairs) {  // the one linear effect swapped for a pair
-      std::vector<Effect> swapped = rep.present;
-      for (Effect& e : swapped)
-        if (is_linear(e)) e = g;
-      swapped.push_back(h);
-      r.correct_up_to_alternatives = r.correct_up_to_alternatives || joined(swapped) == r.truth;
-    }
+    // Whether the verdict is the truth with its one linear effect swapped for
+    // `swap` and/or `extra` added, as the report's named alternatives allow.
+    const auto truth_with = [&](std::optional<Effect> swap, std::optional<Effect> extra) {
+      std::vector<Effect> v = rep.present;
+      for (Effect& e : v)
+        if (swap && is_linear(e)) e = *swap;
+      if (extra) v.push_back(*extra);
+      return joined(v) == r.truth;
+    };
+    for (const auto& alt : rep.alternatives) r.correct_up_to_alternatives |= truth_with(alt.first, std::nullopt);
+    for (const auto& [g, h] : rep.alternative_pairs) r.correct_up_to_alternatives |= truth_with(g, h);
+    for (const auto& add : rep.possible_additions) r.correct_up_to_alternatives |= truth_with(std::nullopt, add.first);
     r.named_alternatives =
         static_cast<int>(rep.alternatives.size() + rep.alternative_pairs.size() + rep.possible_additions.size());
-    for (const auto& add : rep.possible_additions) {  // an effect the report says may be there too
-      std::vector<Effect> with = rep.present;
-      with.push_back(add.first);
-      r.correct_up_to_alternatives = r.correct_up_to_alternatives || joined(with) == r.truth;
-    }
     r.gap_before = rep.gap_before;
     r.gap_after = rep.gap_after;
     r.p_period_power = rep.p_period_power;
