@@ -1914,8 +1914,7 @@ class ForwardSelection {
     Stage st = model;
     st.first = drop_;
     st = evaluate(std::move(st));
-    for (EffectFit& f : st.fits)
-      if (f.effect() == Effect::Leakage) f.p_value = p_leakage_;
+    set_p(st, Effect::Leakage, p_leakage_);
     return st;
   }
 
@@ -1961,8 +1960,7 @@ class ForwardSelection {
       p = addition_p(e, cur, next);
       next.admitted = next.admitted && p < admission_level(e, o_) && relevant(cur.gap, next.gap, floor(cur));
     }
-    for (EffectFit& f : next.fits)
-      if (f.effect() == e) f.p_value = p;
+    set_p(next, e, p);
     return next;
   }
 
@@ -2099,8 +2097,8 @@ class ForwardSelection {
         if (!(score(alt) < score(next))) continue;
         const double p = addition_p(g, cur, alt);
         if (p < o_.effect_alpha && passes(cur, alt)) {
-          for (EffectFit& f : alt.fits)
-            if (f.effect() == g || f.effect() == added) f.p_value = p;
+          set_p(alt, g, p);
+          set_p(alt, added, p);
           next = std::move(alt);
           continue;
         }
@@ -2113,9 +2111,7 @@ class ForwardSelection {
           each_pays = ps.back() < admission_level(m, o_) && passes(other, alt);
         }
         if (!each_pays) continue;
-        for (EffectFit& f : alt.fits)
-          for (size_t k = 0; k < alt.linear.size(); ++k)
-            if (f.effect() == alt.linear[k]) f.p_value = ps[k];
+        for (size_t k = 0; k < alt.linear.size(); ++k) set_p(alt, alt.linear[k], ps[k]);
         next = std::move(alt);
       }
     return next;
@@ -2130,6 +2126,12 @@ class ForwardSelection {
   static const EffectFit* fit_of(const Stage& st, Effect e) {
     const auto f = std::find_if(st.fits.begin(), st.fits.end(), [&](const EffectFit& x) { return x.effect() == e; });
     return f == st.fits.end() ? nullptr : &*f;
+  }
+
+  // The p-value that admitted e into the stage, set on e's fit.
+  static void set_p(Stage& st, Effect e, double p) {
+    for (EffectFit& f : st.fits)
+      if (f.effect() == e) f.p_value = p;
   }
 
   // `st` without the linear effect m (its fit dropped; not refitted).
@@ -2179,8 +2181,7 @@ class ForwardSelection {
     split = evaluate(std::move(split));
     const double p = addition_p(Effect::GainError, unit, split);
     if (!(p < admission_level(Effect::GainError, o_) && passes(unit, split))) return std::nullopt;
-    for (EffectFit& f : split.fits)
-      if (f.effect() == Effect::GainError) f.p_value = p;
+    set_p(split, Effect::GainError, p);
     return split;
   }
 
