@@ -72,7 +72,7 @@ namespace fdsid {
 
 struct GapOptions {
   double alpha = 0.01;         ///< level of each detection test (gap, nonlinearity, leakage)
-  double effect_alpha = 1e-3;  ///< level of the F-test admitting a linear effect, and of the transient test admitting leakage
+  double effect_alpha = 1e-3;  ///< level of the F-test admitting a linear effect, of the transient test admitting leakage, and of the nonlinearity's test where it is added beside an effect found
   double min_share = 0.25;     ///< share of the current excess gap an admitted effect must remove
   double fdr = 0.05;           ///< Benjamini–Hochberg false-discovery rate of the bands
 };
