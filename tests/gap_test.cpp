@@ -1045,8 +1045,8 @@ TEST(GapDiagnosis, ALightlyDampedModeAtALowLineIsFittedThrough) {
 // such effect: an unmodelled mode must peak inside the band, so the best it
 // offers is one of the model's modes moved out of the band (as the F-16's
 // order-16 model on its own Level-1 record, 15.8 → 16.4 Hz; beside a cubic,
-// until stop 73, to 19.5 Hz) and an unmodelled mode at the band's edge. The report names both stand-ins and
-// does not call the gap explained.
+// until stop 73, to 19.5 Hz) and an unmodelled mode at the band's edge. The
+// report names both stand-ins and does not call the gap explained.
 TEST(GapDiagnosis, AModeAboveTheBandIsNamedAStandIn) {
   const StateSpace g = pintelon_plant();
   RecordMeta meta;
